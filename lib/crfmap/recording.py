@@ -1,0 +1,70 @@
+"""What a robot recorded: laser scans, poses, odometry and commands, independent of file format.
+
+Readers (ROS1/ROS2 bags, CARMEN logs) and the simulator produce these; the grid builder
+and the bag writer consume them. Units are SI (metres, radians, seconds); poses are
+(x, y, yaw) with yaw counter-clockwise from +x (REP 103).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class Trajectory:
+    """Timed planar poses of one frame in another (e.g. base_link in odom)."""
+
+    stamps: np.ndarray  # (n,) [s]
+    poses: np.ndarray  # (n, 3) x [m], y [m], yaw [rad]
+    frame_id: str = "odom"  # the fixed frame
+    child_frame_id: str = "base_link"  # the moving frame
+    twists: np.ndarray | None = None  # (n, 2) forward speed [m/s], yaw rate [rad/s], if known
+
+    def __len__(self):
+        return len(self.stamps)
+
+
+@dataclass
+class ScanSet:
+    """Laser scans with the laser's pose in a fixed frame at each scan: what the grid builder needs.
+
+    ``ranges[i, k]`` is beam k of scan i at angle ``angle_min + k * angle_increment`` in
+    the laser frame. REP 117: +inf = no return, -inf = too close, NaN = invalid.
+    """
+
+    ranges: np.ndarray  # (n_scans, n_beams) float32 [m]
+    angle_min: float  # [rad]
+    angle_increment: float  # [rad]
+    range_min: float  # [m]
+    range_max: float  # [m]
+    laser_poses: np.ndarray  # (n_scans, 3) pose of the laser in frame_id
+    stamps: np.ndarray  # (n_scans,) [s]
+    frame_id: str = "map"
+    laser_frame_id: str = "laser"
+    source: str = ""  # where the scans came from, for messages
+
+    def __len__(self):
+        return int(self.ranges.shape[0])
+
+    @property
+    def angles(self) -> np.ndarray:
+        return self.angle_min + self.angle_increment * np.arange(self.ranges.shape[1])
+
+
+@dataclass
+class Recording:
+    """Everything a (real or simulated) run records, as a bag would hold it.
+
+    ``scans.laser_poses`` are the laser poses in ``map`` (true or corrected ones);
+    ``odometry`` is base_link in odom as the wheels report it; ``true_poses`` is
+    base_link in map when known (simulation, corrected logs).
+    """
+
+    scans: ScanSet
+    laser_mount: tuple = (0.0, 0.0, 0.0)  # base_link -> laser (x, y, yaw), from /tf_static
+    odometry: Trajectory | None = None
+    true_poses: Trajectory | None = None
+    cmd_vel: Trajectory | None = None  # poses unused (zeros); twists = commanded (v, w)
+    ground_truth: object | None = None  # an OccupancyGrid, when known
+    meta: dict = field(default_factory=dict)
