@@ -2,7 +2,8 @@
 
 Notebooks and commands never build paths from the working directory; they ask here.
 
-- ``PROJECT_ROOT``: the checkout (``CRFMAP_ROOT`` overrides it).
+- ``PROJECT_ROOT``: the checkout (``CRFMAP_ROOT`` overrides it); ``CRFMAP_OUTPUT_ROOT`` moves
+  every output folder below elsewhere.
 - ``FIGURES``: generated figures (``figures/``), ``GENERATED``: generated tables and
   numbers for the paper (``paper/generated/``), ``OUT``: executed notebooks and
   other run outputs (``out/``). None of these are committed.
@@ -17,10 +18,14 @@ from pathlib import Path
 from .errors import DataMissingError
 
 PROJECT_ROOT = Path(os.environ.get("CRFMAP_ROOT", Path(__file__).resolve().parents[2]))
-FIGURES = PROJECT_ROOT / "figures"
-GENERATED = PROJECT_ROOT / "paper" / "generated"
-OUT = PROJECT_ROOT / "out"
 NOTEBOOKS = PROJECT_ROOT / "notebooks"
+PAPER = PROJECT_ROOT / "paper"
+# Outputs go under the checkout unless CRFMAP_OUTPUT_ROOT points elsewhere (the tests do that,
+# so executing the notebooks in CI never touches the checkout's figures/).
+OUTPUT_ROOT = Path(os.environ.get("CRFMAP_OUTPUT_ROOT", PROJECT_ROOT))
+FIGURES = OUTPUT_ROOT / "figures"
+GENERATED = OUTPUT_ROOT / "paper" / "generated"
+OUT = OUTPUT_ROOT / "out"
 
 # What each data file is and where to get it, for the error a user sees when it is missing.
 DATA_SOURCES = {
