@@ -1,0 +1,69 @@
+"""``crfmap infer IN OUT``: refine a grid with loopy belief propagation."""
+from __future__ import annotations
+
+import argparse
+
+from ..errors import InputError
+
+
+def add_parser(sub):
+    p = sub.add_parser(
+        "infer",
+        help="run LBP on a grid (map_server YAML or .npy) and write the beliefs",
+        description="Run loopy belief propagation on an occupancy grid's CRF and write P(occupied). "
+        "Tables are 'oo,oe,eo,ee' (rows: cell occupied/empty; columns: neighbour occupied/empty).",
+    )
+    p.add_argument("input", help="map_server YAML or .npy grid of P(occupied)")
+    p.add_argument("output", help="map_server YAML (scale mode keeps probabilities) or .npy")
+    p.add_argument("--hidden", default="10,1,1,10", help="hidden pairwise table oo,oe,eo,ee (default 10,1,1,10)")
+    p.add_argument("--link", default="1,0,0,1", help="link table oo,oe,eo,ee (default 1,0,0,1)")
+    p.add_argument("--schedule", default="checkerboard", choices=["checkerboard", "flooding", "sweep", "thesis"])
+    p.add_argument("--max-iter", type=int, default=1000, help="iteration limit (the thesis used 2)")
+    p.add_argument("--tol", type=float, default=1e-5, help="stop when the largest message change is below this")
+    p.add_argument("--damping", type=float, default=0.0, help="weight of the old message, in [0, 1)")
+    p.add_argument("--pairing", default="receiver", choices=["receiver", "oriented"],
+                   help="how a non-symmetric hidden table applies to an edge (see crfmap.potentials)")
+    p.add_argument("--float32", action="store_true", help="compute in float32 (faster, less memory)")
+    p.add_argument("--margin", type=int, default=None, metavar="CELLS",
+                   help="infer only cells within CELLS of an observed cell; the rest stay unknown "
+                   "(default: the whole grid, as the thesis; see crfmap.lbp.near_known)")
+    p.add_argument("--free-thresh", type=float, default=None,
+                   help="override a YAML input's free_thresh when loading (nav2's map_saver writes 0.25, "
+                   "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
+    p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
+    p.add_argument("--mode", default="scale", choices=["scale", "trinary"],
+                   help="map_server mode of a YAML output (scale keeps probabilities)")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..lbp import infer
+    from ..mapio import load_grid, load_map, save_grid
+    from ..potentials import check_table
+
+    if args.max_iter < 0:
+        raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
+    hidden = check_table(args.hidden, "--hidden")
+    link = check_table(args.link, "--link")
+    if str(args.input).lower().endswith((".yaml", ".yml")):
+        grid = load_map(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh)
+    else:
+        grid = load_grid(args.input)
+    region = None
+    if args.margin is not None:
+        from ..lbp import near_known
+
+        region = near_known(grid, args.margin)
+    result = infer(grid, hidden, link, schedule=args.schedule, max_iter=args.max_iter, tol=args.tol,
+                   damping=args.damping, pairing=args.pairing, region=region,
+                   dtype=np.float32 if args.float32 else np.float64)
+    if region is not None:  # outside the region nothing was inferred: keep the input there
+        beliefs = np.where(region, result.beliefs.probability, grid.probability)
+        result.beliefs = result.beliefs.with_probability(beliefs)
+    save_kw = {"mode": args.mode} if str(args.output).lower().endswith((".yaml", ".yml")) else {}
+    save_grid(result.beliefs, args.output, **save_kw)
+    print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, "
+          f"{result.seconds:.3f} s -> {args.output}")
+    return 0

@@ -1,0 +1,36 @@
+"""``crfmap metrics PRED TRUTH``: MSE, precision, recall, accuracy and AUC of a grid."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+
+def add_parser(sub):
+    p = sub.add_parser("metrics", help="compare a grid with ground truth",
+                       description="MSE over all cells; precision/recall/accuracy over cells not exactly 0.5 "
+                       "(occupied = P > 0.5); ROC AUC.")
+    p.add_argument("prediction", help="map_server YAML or .npy")
+    p.add_argument("truth", help="map_server YAML or .npy (occupied where P > 0.5)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import InputError
+    from ..mapio import load_grid
+    from ..metrics import evaluate
+
+    pred = load_grid(args.prediction)
+    truth = load_grid(args.truth)
+    if pred.shape != truth.shape:
+        raise InputError(args.prediction, f"shape {pred.shape} does not match {args.truth}'s {truth.shape}")
+    r = evaluate(pred, truth)
+    if args.json:
+        d = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in r.as_dict().items()}
+        print(json.dumps(d))
+    else:
+        print(f"mse {r.mse:.6f}  precision {r.precision:.4f}  recall {r.recall:.4f}  "
+              f"accuracy {r.accuracy:.4f}  auc {r.auc:.4f}  (tp {r.tp} fp {r.fp} fn {r.fn} tn {r.tn}, "
+              f"{r.unknown} unknown cells left out)")
+    return 0

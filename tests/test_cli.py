@@ -1,0 +1,118 @@
+"""The infer and metrics commands: results, one-line errors with exit status 2, nothing half-written."""
+import json
+
+import numpy as np
+import pytest
+
+from crfmap.cli import main
+from crfmap.mapio import load_grid, save_grid
+from crfmap.grid import OccupancyGrid
+from crfmap.lbp import infer
+from crfmap.paths import data_file, have_data
+
+OLIN = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"
+
+
+def noisy_grid(seed=0):
+    rng = np.random.default_rng(seed)
+    truth = np.zeros((24, 30))
+    truth[5:19, 10] = 1
+    truth[12, 3:27] = 1
+    obs = np.clip(truth + rng.normal(0, 0.3, truth.shape), 0, 1)
+    return OccupancyGrid(obs, resolution=0.05, origin=(1.0, 2.0, 0.0)), OccupancyGrid(truth, resolution=0.05)
+
+
+def test_infer_npy_matches_library_and_keeps_metadata(tmp_path, capsys):
+    grid, _ = noisy_grid()
+    save_grid(grid, tmp_path / "in.npy")
+    rc = main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), "--hidden", "5,1,1,5", "--tol", "1e-9"])
+    assert rc == 0
+    line = capsys.readouterr().out
+    assert "converged" in line and "iterations" in line
+    out = load_grid(tmp_path / "out.npy")
+    expected = infer(grid, [[5, 1], [1, 5]], tol=1e-9).beliefs.probability
+    np.testing.assert_allclose(out.probability, expected)
+    assert out.resolution == 0.05 and out.origin == (1.0, 2.0, 0.0)
+
+
+def test_infer_thesis_two_iterations(tmp_path, capsys):
+    grid, _ = noisy_grid(1)
+    save_grid(grid, tmp_path / "in.npy")
+    assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), "--schedule", "thesis",
+                 "--max-iter", "2"]) == 0
+    assert "2 iterations" in capsys.readouterr().out
+    expected = infer(grid, schedule="thesis", max_iter=2).beliefs.probability
+    np.testing.assert_allclose(load_grid(tmp_path / "out.npy").probability, expected)
+
+
+def test_infer_margin_keeps_far_unknown_cells(tmp_path):
+    p = np.full((20, 40), 0.5)
+    p[8:12, 2:6] = 0.9
+    save_grid(OccupancyGrid(p), tmp_path / "in.npy")
+    assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), "--margin", "3"]) == 0
+    out = load_grid(tmp_path / "out.npy").probability
+    assert np.all(out[:, 12:] == 0.5)  # more than 3 cells from any observation: untouched
+    assert out[10, 7] > 0.5  # within the margin: filled from the neighbours
+
+
+def test_metrics_json(tmp_path, capsys):
+    grid, truth = noisy_grid(2)
+    save_grid(grid, tmp_path / "p.npy")
+    save_grid(truth, tmp_path / "t.npy")
+    assert main(["metrics", str(tmp_path / "p.npy"), str(tmp_path / "t.npy"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert set(d) >= {"mse", "precision", "recall", "accuracy", "auc"}
+    assert d["mse"] == pytest.approx(float(np.mean((grid.probability - truth.probability) ** 2)))
+
+
+@pytest.mark.skipif(not have_data(OLIN), reason="Olin map not in the data folder")
+def test_infer_refines_the_real_olin_map(tmp_path, capsys):
+    out = tmp_path / "refined.yaml"
+    rc = main(["infer", str(data_file(OLIN)), str(out), "--free-thresh", "0.196", "--margin", "5",
+               "--max-iter", "30", "--float32"])
+    assert rc == 0
+    refined = load_grid(out)
+    original = load_grid(data_file(OLIN))
+    assert refined.shape == original.shape and refined.origin == original.origin
+    assert refined.resolution == original.resolution
+    # it reloads identically when written again
+    save_grid(refined, tmp_path / "again.yaml")
+    np.testing.assert_array_equal(load_grid(tmp_path / "again.yaml").probability, refined.probability)
+
+
+def _bad(tmp_path):
+    good = tmp_path / "good.npy"
+    save_grid(OccupancyGrid(np.full((4, 4), 0.5)), good)
+    np.save(tmp_path / "nan.npy", np.array([[0.5, np.nan]]))
+    np.save(tmp_path / "range.npy", np.array([[0.5, 2.0]]))
+    np.save(tmp_path / "three_d.npy", np.zeros((2, 2, 2)))
+    np.save(tmp_path / "ints.npy", np.zeros((2, 2), dtype=np.int64))
+    np.save(tmp_path / "other.npy", np.full((3, 3), 0.5))
+    (tmp_path / "broken.yaml").write_text("image: x.pgm\nresolution: [\n")
+    (tmp_path / "nokey.yaml").write_text("image: x.pgm\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.2\n")
+    return good
+
+
+@pytest.mark.parametrize("args, words", [
+    (["infer", "{d}/missing.npy", "{d}/o.npy"], ["missing.npy"]),
+    (["infer", "{d}/nan.npy", "{d}/o.npy"], ["nan.npy", "NaN"]),
+    (["infer", "{d}/range.npy", "{d}/o.npy"], ["range.npy"]),
+    (["infer", "{d}/three_d.npy", "{d}/o.npy"], ["three_d.npy", "2-D"]),
+    (["infer", "{d}/ints.npy", "{d}/o.npy"], ["ints.npy", "float"]),
+    (["infer", "{d}/broken.yaml", "{d}/o.npy"], ["broken.yaml"]),
+    (["infer", "{d}/nokey.yaml", "{d}/o.npy"], ["nokey.yaml", "resolution"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--hidden", "1,-2,1,1"], ["--hidden", "non-negative"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--link", "0,0,1,1"], ["--link", "all zero"]),
+    (["infer", "{d}/good.npy", "{d}/o.txt"], ["o.txt"]),
+    (["metrics", "{d}/good.npy", "{d}/other.npy"], ["shape"]),
+])
+def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, args, words):
+    _bad(tmp_path)
+    rc = main([a.format(d=tmp_path) for a in args])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    for w in words:
+        assert w in err
+    assert not (tmp_path / "o.npy").exists() and not (tmp_path / "o.txt").exists()
+    assert not list(tmp_path.glob(".*tmp"))
