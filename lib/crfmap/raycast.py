@@ -22,8 +22,8 @@ def _line_length(x0, y0, x1, y1):
 def _bresenham(x0, y0, x1, y1, out):
     """Write the cells of the line (x0, y0) -> (x1, y1) into ``out[:, 0:2]`` as (x, y); return the count.
 
-    ``out`` needs at least ``_line_length(...)`` rows. Ties (the diagonal-gap ambiguity
-    of thesis Fig. 15) step x before y, as Listing 1 does.
+    ``out`` needs at least ``_line_length(...)`` rows. At a tie (the diagonal-gap ambiguity
+    of thesis Fig. 15) the minor coordinate stays nearer the start, as Listing 1's error term does.
     """
     dx = abs(x1 - x0)
     dy = abs(y1 - y0)
