@@ -1,0 +1,46 @@
+"""``crfmap convert INPUT OUT_BAG``: a CARMEN log (or a bag) as a ROS2 or ROS1 bag."""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..errors import InputError
+from .build import add_bag_options
+
+
+def add_parser(sub):
+    p = sub.add_parser(
+        "convert",
+        help="convert a CARMEN log (or a bag) to a ROS2 or ROS1 bag",
+        description="Write /scan, /odom, /tf, /tf_static and /ground_truth_pose (corrected poses) "
+        "of a CARMEN log as a ROS bag. A bag as input is re-written in the other format.",
+    )
+    p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
+    p.add_argument("output", help="ROS2 bag folder, or ROS1 file ending in .bag")
+    p.add_argument("--format", choices=["ros2", "ros1"], default=None,
+                   help="bag format (default: ros1 if OUT_BAG ends in .bag, else ros2)")
+    add_bag_options(p)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..bagio import write_bag
+    from .build import load_recording
+
+    out = Path(args.output)
+    fmt = args.format or ("ros1" if out.suffix == ".bag" else "ros2")
+    if fmt == "ros1" and out.suffix != ".bag":
+        raise InputError(out, "a ROS1 bag file must end in .bag")
+    if fmt == "ros2" and out.suffix == ".bag":
+        raise InputError(out, "a ROS2 bag is a folder; drop the .bag suffix or use --format ros1")
+    if Path(args.input).resolve() == out.resolve():
+        raise InputError(out, "the output would replace the input")
+    start = time.perf_counter()
+    rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
+                         laser_mount=args.laser_mount)
+    write_bag(rec, out, fmt=fmt)
+    n_odom = len(rec.odometry) if rec.odometry is not None else 0
+    print(f"{args.input}: {len(rec.scans)} scans, {n_odom} odometry poses -> {fmt} bag {out} "
+          f"({time.perf_counter() - start:.2f} s)")
+    return 0
