@@ -218,6 +218,9 @@ def learn_gradient(
         if step_size < min_step:
             break
     bar.close()
+    if best >= before:  # lifting zero entries cost more than the search won: keep the start
+        H, L = rescale(check_table(hidden, "hidden"), check_table(link, "link"))
+        return LearningResult(H, L, before, before, trace, "gradient")
     e = np.exp(theta)
     H, L = rescale(e[:4].reshape(2, 2), e[4:].reshape(2, 2))
     return LearningResult(H, L, before, best, trace, "gradient")
