@@ -12,24 +12,11 @@ from crfmap.cli import main
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.recording import Recording, ScanSet, Trajectory
+from naive_frames import angle_diff, pose_of, se2
 
 ROS2_BAG = "rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2"
 ROS1_BAG = "rosbags/zaki0929_bagfiles/2019_jan17_expt04_bagfile.bag"
 FORMATS = [("ros2", "bag2"), ("ros1", "bag1.bag")]
-
-
-def se2(x, y, yaw):
-    """Homogeneous matrix of a planar pose: an independent check of the pose algebra."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, x], [s, c, y], [0, 0, 1.0]])
-
-
-def pose_of(m):
-    return np.array([m[0, 2], m[1, 2], math.atan2(m[1, 0], m[0, 0])])
-
-
-def angle_diff(a, b):
-    return np.abs((np.asarray(a) - np.asarray(b) + np.pi) % (2 * np.pi) - np.pi)
 
 
 MOUNT = (0.1, -0.05, math.pi / 2)

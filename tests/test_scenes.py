@@ -1,6 +1,4 @@
-"""Ground-truth scenes: shapes, polarity, seeds, and reachability against a brute-force reference."""
-from collections import deque
-
+"""Ground-truth scenes: shapes, polarity, seeds, and the enclosed parts no robot reaches."""
 import numpy as np
 import pytest
 
@@ -8,8 +6,7 @@ from crfmap import paths
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.scenes import (
-    SCENES, Scene, enclosed_boxes, make_scene, noisy_image, occluded_walls, office_floor, reachable, traversable,
-    x_image,
+    SCENES, Scene, enclosed_boxes, make_scene, noisy_image, occluded_walls, reachable, x_image,
 )
 
 
@@ -122,85 +119,6 @@ def test_enclosed_boxes_interiors_unreachable(variant, hollow, seed):
         assert (p[y0, x0 : x1 + 1] == 1).all() and (p[y0 : y1 + 1, x0] == 1).all()
     # everything free outside the boxes is one connected room the robot reaches
     assert np.array_equal(mask, (p == 0) & ~inside_any)
-
-
-def naive_traversable(occ, radius_cells):
-    """Cell i is free when no occupied cell's square, nor the outside of the grid, comes nearer than the radius."""
-    h, w = occ.shape
-    ys, xs = np.nonzero(occ)
-    out = np.zeros((h, w), bool)
-    for y in range(h):
-        for x in range(w):
-            if occ[y, x]:
-                continue
-            gaps = np.hypot(np.maximum(np.abs(xs - x) - 0.5, 0), np.maximum(np.abs(ys - y) - 0.5, 0))
-            border = min(x + 0.5, w - x - 0.5, y + 0.5, h - y - 0.5)
-            out[y, x] = gaps.min(initial=np.inf) >= radius_cells and (radius_cells == 0 or border >= radius_cells)
-    return out
-
-
-def naive_flood(free, start):
-    h, w = free.shape
-    seen = np.zeros_like(free)
-    seen[start[1], start[0]] = True
-    queue = deque([start])
-    while queue:
-        x, y = queue.popleft()
-        for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
-            if 0 <= nx < w and 0 <= ny < h and free[ny, nx] and not seen[ny, nx]:
-                seen[ny, nx] = True
-                queue.append((nx, ny))
-    return seen
-
-
-@pytest.mark.parametrize("radius", [0.0, 0.05, 0.1, 0.149, 0.15, 0.23, 0.4])
-def test_reachable_matches_brute_force_with_footprint(radius):
-    rng = np.random.default_rng(7)
-    for _ in range(6):
-        occ = rng.random((17, 23)) < 0.12
-        grid = OccupancyGrid(occ.astype(float), resolution=0.1)
-        free = naive_traversable(occ, radius / 0.1)
-        assert np.array_equal(traversable(grid, radius), free)
-        starts = np.argwhere(free)
-        if len(starts) == 0:
-            continue
-        iy, ix = starts[rng.integers(len(starts))]
-        got = reachable(grid, ((ix + 0.5) * 0.1, (iy + 0.5) * 0.1, 0.0), radius)
-        assert np.array_equal(got, naive_flood(free, (ix, iy)))
-
-
-def test_reachable_footprint_closes_narrow_gaps():
-    cells = np.zeros((9, 15))
-    cells[:, 7] = 1
-    cells[4, 7] = 0  # a one-cell door in a wall
-    grid = OccupancyGrid(cells, resolution=0.1)
-    start = (0.25, 0.45, 0.0)
-    assert reachable(grid, start, 0.0)[4, 12]  # a point robot passes
-    assert not reachable(grid, start, 0.08)[4, 12]  # a 16 cm robot does not fit a 10 cm door
-    with pytest.raises(InputError):
-        reachable(grid, (0.75, 0.15, 0.0))  # start inside the wall
-    with pytest.raises(InputError):
-        reachable(grid, (5.0, 0.15, 0.0))  # outside the grid
-
-
-def test_office_floor():
-    a, b = office_floor(12.0, 10.0, 0.1, seed=4), office_floor(12.0, 10.0, 0.1, seed=4)
-    assert np.array_equal(a.truth.probability, b.truth.probability) and np.array_equal(a.waypoints, b.waypoints)
-    assert not np.array_equal(a.truth.probability, office_floor(12.0, 10.0, 0.1, seed=5).truth.probability)
-    for w, h, res, seed in ((6.0, 5.0, 0.1, 0), (20.0, 15.0, 0.05, 1), (31.0, 9.0, 0.1, 2), (9.0, 33.0, 0.1, 3)):
-        s = office_floor(w, h, res, seed)
-        assert s.truth.shape == (round(h / res), round(w / res))
-        mask = reachable(s.truth, s.start, s.robot_radius)
-        assert len(s.waypoints) >= 1
-        for x, y in s.waypoints:
-            assert mask[int(y / res), int(x / res)]
-        p = s.truth.probability
-        assert (p[0] == 1).all() and (p[-1] == 1).all() and (p[:, 0] == 1).all() and (p[:, -1] == 1).all()
-        assert mask.sum() > 0.3 * (p == 0).sum()  # most of the floor is reachable
-    with pytest.raises(InputError):
-        office_floor(2.0, 10.0)
-    with pytest.raises(InputError):
-        office_floor(10.0, 10.0, resolution=0.0)
 
 
 def test_make_scene_rejects_unknown_names_and_arguments():

@@ -13,6 +13,10 @@ interpolating the moving transforms in time and applying the static mount from
 ``/tf_static``. Scans outside the pose track's time span are dropped and counted in
 ``recording.meta``. Ranges are kept as recorded (REP 117 filtering is the grid
 builder's job).
+
+The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``,
+``interpolate_poses`` and ``wrap_angle`` are importable from here too); building and
+decoding the messages themselves is :mod:`crfmap._rosmsgs`.
 """
 from __future__ import annotations
 
@@ -25,7 +29,11 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_dir, atomic_path
+from ._rosmsgs import (T_GRID, T_ODOM, T_POSE_STAMPED, T_SCAN, T_TF, T_TWIST, TF_TYPES, MessageFactory,
+                       grid_from_message, pose_of, to_ns, to_seconds, typestore)
 from .errors import InputError
+from .frames import TfTree, compose, interpolate_poses, inverse
+from .frames import wrap_angle  # noqa: F401  (re-exported: crfmap.bagio.wrap_angle predates crfmap.frames)
 from .grid import OccupancyGrid
 from .recording import Recording, ScanSet, Trajectory
 
@@ -35,171 +43,8 @@ TF_TOPIC, TF_STATIC_TOPIC = "/tf", "/tf_static"
 TRUTH_TOPIC, MAP_TOPIC = "/ground_truth_pose", "/map"
 ANGLE_TOLERANCE = 1e-4  # [rad] scan geometry differing by less than this counts as the same (float32 angles)
 
-T_SCAN = "sensor_msgs/msg/LaserScan"
-T_ODOM = "nav_msgs/msg/Odometry"
-T_TWIST = "geometry_msgs/msg/Twist"
-T_TF = "tf2_msgs/msg/TFMessage"
-T_POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
-T_GRID = "nav_msgs/msg/OccupancyGrid"
-TF_TYPES = ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage")
-
-
-# --- planar pose algebra (x, y, yaw), vectorised over rows ----------------------------------
-
-
-def wrap_angle(a):
-    """Angles wrapped to [-pi, pi)."""
-    return (np.asarray(a, dtype=np.float64) + np.pi) % (2 * np.pi) - np.pi
-
-
-def compose(a, b):
-    """Pose ``a`` then ``b`` (b expressed in a's frame): the pose of b's frame in a's parent.
-
-    >>> compose([1.0, 0.0, np.pi / 2], [1.0, 0.0, 0.0]).round(6).tolist()
-    [1.0, 1.0, 1.570796]
-    """
-    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
-    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1],
-                     a[..., 1] + s * b[..., 0] + c * b[..., 1],
-                     wrap_angle(a[..., 2] + b[..., 2])], axis=-1)
-
-
-def inverse(a):
-    """The pose whose composition with ``a`` is the identity."""
-    a = np.asarray(a, np.float64)
-    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([-c * a[..., 0] - s * a[..., 1], s * a[..., 0] - c * a[..., 1], wrap_angle(-a[..., 2])], axis=-1)
-
-
-def interpolate_poses(stamps, poses, times):
-    """Poses at ``times`` by linear interpolation (yaw unwrapped); also a mask of times inside the track.
-
-    >>> p, ok = interpolate_poses([0.0, 1.0], [[0, 0, 3.0], [2, 0, -3.0]], [0.5, 2.0])
-    >>> p[0].round(3).tolist(), ok.tolist()
-    ([1.0, 0.0, -3.142], [True, False])
-    """
-    stamps = np.asarray(stamps, np.float64)
-    poses = np.asarray(poses, np.float64)
-    times = np.asarray(times, np.float64)
-    order = np.argsort(stamps, kind="stable")
-    stamps, poses = stamps[order], poses[order]
-    keep = np.append(np.diff(stamps) > 0, True)  # the last of equal stamps wins
-    stamps, poses = stamps[keep], poses[keep]
-    yaw = np.unwrap(poses[:, 2])
-    out = np.stack([np.interp(times, stamps, poses[:, 0]), np.interp(times, stamps, poses[:, 1]),
-                    wrap_angle(np.interp(times, stamps, yaw))], axis=-1)
-    # A pose sampled exactly at a knot keeps its value bit for bit (np.interp at a knot is exact,
-    # but the unwrap/wrap round trip of yaw is not).
-    idx = np.searchsorted(stamps, times)
-    exact = (idx < len(stamps)) & (stamps[np.minimum(idx, len(stamps) - 1)] == times)
-    out[exact, 2] = poses[idx[exact], 2]
-    inside = (times >= stamps[0]) & (times <= stamps[-1])
-    return out, inside
-
-
-def _yaw_to_quaternion(yaw):
-    return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
-
-
-def _quaternion_to_yaw(q):
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def _pose_of(msg_pose):
-    """(x, y, yaw) of a geometry_msgs Pose or Transform."""
-    p = getattr(msg_pose, "position", None) or getattr(msg_pose, "translation")
-    q = getattr(msg_pose, "orientation", None) or getattr(msg_pose, "rotation")
-    return (float(p.x), float(p.y), _quaternion_to_yaw(q))
-
-
-def _ns(seconds) -> int:
-    return int(round(float(seconds) * 1e9))
-
-
-def _seconds(stamp) -> float:
-    return stamp.sec + 1e-9 * stamp.nanosec
-
 
 # --- writing --------------------------------------------------------------------------------
-
-
-def _typestore(fmt):
-    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
-
-    if fmt == "ros2":
-        return get_typestore(Stores.ROS2_HUMBLE)
-    store = get_typestore(Stores.ROS1_NOETIC)
-    # Noetic's store lacks tf2_msgs; /tf in ROS1 Noetic is tf2_msgs/TFMessage (same md5 as tf/tfMessage).
-    store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", T_TF))
-    return store
-
-
-class _MessageFactory:
-    """Builds messages of one typestore (ROS1 headers carry a seq, ROS2 ones do not)."""
-
-    def __init__(self, store, ros1):
-        self.t = store.types
-        self.ros1 = ros1
-        self.seq = 0
-
-    def time(self, ns):
-        return self.t["builtin_interfaces/msg/Time"](sec=int(ns // 1_000_000_000), nanosec=int(ns % 1_000_000_000))
-
-    def header(self, ns, frame):
-        if self.ros1:
-            self.seq += 1
-            return self.t["std_msgs/msg/Header"](seq=self.seq, stamp=self.time(ns), frame_id=frame)
-        return self.t["std_msgs/msg/Header"](stamp=self.time(ns), frame_id=frame)
-
-    def vector(self, x=0.0, y=0.0, z=0.0):
-        return self.t["geometry_msgs/msg/Vector3"](x=float(x), y=float(y), z=float(z))
-
-    def quaternion(self, yaw):
-        x, y, z, w = _yaw_to_quaternion(float(yaw))
-        return self.t["geometry_msgs/msg/Quaternion"](x=x, y=y, z=z, w=w)
-
-    def pose(self, p):
-        return self.t["geometry_msgs/msg/Pose"](
-            position=self.t["geometry_msgs/msg/Point"](x=float(p[0]), y=float(p[1]), z=0.0),
-            orientation=self.quaternion(p[2]))
-
-    def twist(self, v, w):
-        return self.t[T_TWIST](linear=self.vector(v), angular=self.vector(z=w))
-
-    def transform(self, ns, parent, child, p):
-        return self.t["geometry_msgs/msg/TransformStamped"](
-            header=self.header(ns, parent), child_frame_id=child,
-            transform=self.t["geometry_msgs/msg/Transform"](translation=self.vector(p[0], p[1]),
-                                                             rotation=self.quaternion(p[2])))
-
-    def tf(self, transforms):
-        return self.t[T_TF](transforms=transforms)
-
-    def scan(self, ns, frame, ranges, scans):
-        n = len(ranges)
-        return self.t[T_SCAN](
-            header=self.header(ns, frame), angle_min=float(scans.angle_min),
-            angle_max=float(scans.angle_min + (n - 1) * scans.angle_increment),
-            angle_increment=float(scans.angle_increment), time_increment=0.0, scan_time=0.0,
-            range_min=float(scans.range_min), range_max=float(scans.range_max),
-            ranges=np.ascontiguousarray(ranges, dtype=np.float32), intensities=np.zeros(0, np.float32))
-
-    def odometry(self, ns, frame, child, p, v, w):
-        return self.t[T_ODOM](
-            header=self.header(ns, frame), child_frame_id=child,
-            pose=self.t["geometry_msgs/msg/PoseWithCovariance"](pose=self.pose(p), covariance=np.zeros(36)),
-            twist=self.t["geometry_msgs/msg/TwistWithCovariance"](twist=self.twist(v, w), covariance=np.zeros(36)))
-
-    def pose_stamped(self, ns, frame, p):
-        return self.t[T_POSE_STAMPED](header=self.header(ns, frame), pose=self.pose(p))
-
-    def grid(self, ns, grid):
-        info = self.t["nav_msgs/msg/MapMetaData"](
-            map_load_time=self.time(ns), resolution=float(grid.resolution), width=int(grid.width),
-            height=int(grid.height), origin=self.pose(grid.origin))
-        return self.t[T_GRID](header=self.header(ns, grid.frame_id), info=info,
-                              data=grid.to_int8().reshape(-1).astype(np.int8))
 
 
 def _check_recording(recording, name):
@@ -261,8 +106,8 @@ def write_bag(recording, path, fmt="ros2"):
     if fmt == "ros2" and path.suffix == ".bag":
         raise InputError(path, "a ROS2 bag is a folder; a name ending in .bag would be taken for a ROS1 bag")
     scans = _check_recording(recording, path)
-    store = _typestore(fmt)
-    make = _MessageFactory(store, ros1=(fmt == "ros1"))
+    store = typestore(fmt)
+    make = MessageFactory(store, ros1=(fmt == "ros1"))
     messages = _recording_messages(recording, scans, make)  # [(ns, topic, msgtype, msg)]
     messages.sort(key=lambda m: m[0])  # stable: equal stamps keep their order
     if fmt == "ros2":
@@ -299,7 +144,7 @@ def _recording_messages(recording, scans, make):
     mount = np.asarray(recording.laser_mount, np.float64)
     if laser_frame == base_frame and np.any(mount != 0):
         raise InputError("recording", f"laser frame '{laser_frame}' equals the base frame but the laser mount is not zero")
-    scan_ns = np.array([_ns(t) for t in scans.stamps], dtype=np.int64)
+    scan_ns = np.array([to_ns(t) for t in scans.stamps], dtype=np.int64)
     base_at_scans = compose(np.asarray(scans.laser_poses, np.float64), inverse(mount))
     order = np.argsort(scan_ns, kind="stable")
     same = np.nonzero(np.diff(scan_ns[order]) == 0)[0]
@@ -319,7 +164,7 @@ def _recording_messages(recording, scans, make):
     odom_knots = {}
     map_knots = {}
     if odom is not None:
-        odom_ns = np.array([_ns(t) for t in odom.stamps], dtype=np.int64)
+        odom_ns = np.array([to_ns(t) for t in odom.stamps], dtype=np.int64)
         twists = odom.twists if odom.twists is not None else np.zeros((len(odom_ns), 2))
         for j, ns in enumerate(odom_ns):
             out.append((int(ns), ODOM_TOPIC, T_ODOM,
@@ -353,7 +198,7 @@ def _recording_messages(recording, scans, make):
         out.append((ns, TF_TOPIC, T_TF, make.tf(transforms)))
 
     if truth is not None:
-        truth_ns = np.array([_ns(t) for t in truth.stamps], dtype=np.int64)
+        truth_ns = np.array([to_ns(t) for t in truth.stamps], dtype=np.int64)
         t0 = min(t0, int(truth_ns.min()))
         for j, ns in enumerate(truth_ns):
             out.append((int(ns), TRUTH_TOPIC, T_POSE_STAMPED, make.pose_stamped(int(ns), truth.frame_id, truth.poses[j])))
@@ -361,8 +206,8 @@ def _recording_messages(recording, scans, make):
     cmd = recording.cmd_vel
     if cmd is not None and len(cmd) and cmd.twists is not None:
         for j, t in enumerate(cmd.stamps):
-            out.append((_ns(t), CMD_VEL_TOPIC, T_TWIST, make.twist(cmd.twists[j, 0], cmd.twists[j, 1])))
-            t0 = min(t0, _ns(t))
+            out.append((to_ns(t), CMD_VEL_TOPIC, T_TWIST, make.twist(cmd.twists[j, 0], cmd.twists[j, 1])))
+            t0 = min(t0, to_ns(t))
 
     if laser_frame != base_frame:
         out.append((t0, TF_STATIC_TOPIC, T_TF, make.tf([make.transform(t0, base_frame, laser_frame, mount)])))
@@ -416,9 +261,7 @@ class _Collected:
         self.truth_frame = "map"
         self.cmd = []  # (stamp, v, w)
         self.grid = None
-        self.static = {}  # child -> (parent, pose)
-        self.dynamic = {}  # child -> [parent, [(stamp, pose), ...]]
-        self.tf_conflicts = 0
+        self.tf = TfTree()  # from /tf and /tf_static
 
 
 def _add_scan(c, path, topic, index, stamp, msg):
@@ -455,17 +298,8 @@ def _add_scan(c, path, topic, index, stamp, msg):
 
 def _add_transforms(c, msg, static):
     for tr in msg.transforms:
-        parent = tr.header.frame_id.lstrip("/")
-        child = tr.child_frame_id.lstrip("/")
-        pose = _pose_of(tr.transform)
-        if static:
-            c.static[child] = (parent, pose)  # the latest static transform of a frame wins
-            continue
-        entry = c.dynamic.setdefault(child, [parent, []])
-        if entry[0] != parent:
-            c.tf_conflicts += 1  # a frame has one parent in a tf tree; ignore the others
-            continue
-        entry[1].append((_seconds(tr.header.stamp), pose))
+        stamp = None if static else to_seconds(tr.header.stamp)
+        c.tf.add(tr.header.frame_id, tr.child_frame_id, pose_of(tr.transform), stamp)
 
 
 def _pick_topic(path, conns, msgtype_names, wanted, preferred, what, required_choice=True):
@@ -494,7 +328,7 @@ def _collect(path, location, scan_topic):
     errors = _reader_errors()
     c = _Collected()
     try:
-        with AnyReader([location], default_typestore=_typestore("ros2")) as reader:
+        with AnyReader([location], default_typestore=typestore("ros2")) as reader:
             conns = reader.connections
             scan_topic = _pick_topic(path, conns, (T_SCAN,), scan_topic, SCAN_TOPIC, "sensor_msgs/LaserScan")
             if scan_topic is None:
@@ -513,19 +347,19 @@ def _collect(path, location, scan_topic):
                 counts[kind] = index + 1
                 msg = reader.deserialize(raw, conn.msgtype)
                 header = getattr(msg, "header", None)
-                stamp = _seconds(header.stamp) if header is not None else 0.0
+                stamp = to_seconds(header.stamp) if header is not None else 0.0
                 if stamp == 0.0:
                     stamp = bag_ns * 1e-9  # no (or an unset) header stamp: use the recording time
                 if kind == "scan":
                     _add_scan(c, path, conn.topic, index, stamp, msg)
                 elif kind == "odom":
-                    pose = _pose_of(msg.pose.pose)
+                    pose = pose_of(msg.pose.pose)
                     c.odom.append((stamp, *pose, float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z)))
                     c.odom_frames = (msg.header.frame_id.lstrip("/"), msg.child_frame_id.lstrip("/"))
                 elif kind in ("tf", "tf_static"):
                     _add_transforms(c, msg, static=(kind == "tf_static"))
                 elif kind == "truth":
-                    c.truth.append((stamp, *_pose_of(msg.pose)))
+                    c.truth.append((stamp, *pose_of(msg.pose)))
                     c.truth_frame = msg.header.frame_id.lstrip("/")
                 elif kind == "map":
                     c.grid = msg
@@ -539,59 +373,17 @@ def _collect(path, location, scan_topic):
     return c
 
 
-def _static_chain(c, frame, stop=None):
-    """Follow /tf_static up from ``frame``: (top frame, pose of ``frame`` in it, frames passed)."""
-    pose = np.zeros(3)
-    passed = [frame]
-    while frame in c.static and frame != stop:
-        parent, p = c.static[frame]
-        pose = compose(p, pose)
-        frame = parent
-        if frame in passed:
-            break  # a loop: a broken tf tree
-        passed.append(frame)
-    return frame, pose, passed
-
-
 def _mount_on(c, path, laser_frame, base_frame, laser_mount):
     """Pose of the laser frame in ``base_frame`` (from /tf_static, or the caller's override)."""
     if laser_mount is not None:
         return np.asarray(laser_mount, np.float64)
     if laser_frame == base_frame:
         return np.zeros(3)
-    top, pose, passed = _static_chain(c, laser_frame, stop=base_frame)
+    top, pose, passed = c.tf.static_chain(laser_frame, stop=base_frame)
     if top != base_frame:
         raise InputError(path, f"no /tf_static transform chain from '{base_frame}' to the laser frame "
                                f"'{laser_frame}' (give laser_mount to state it)")
     return pose
-
-
-def _tf_poses(c, path, start_frame, start_pose, times):
-    """Poses of ``start_frame`` (times ``start_pose``) in the root of the tf tree at ``times``.
-
-    Returns (poses, inside mask, root frame, number of moving transforms used).
-    """
-    poses = np.broadcast_to(start_pose, (len(times), 3)).copy()
-    inside = np.ones(len(times), bool)
-    frame, seen, moving = start_frame, {start_frame}, 0
-    while True:
-        if frame in c.static:
-            parent, p = c.static[frame]
-            poses = compose(np.asarray(p), poses)
-        elif frame in c.dynamic:
-            parent, track = c.dynamic[frame]
-            stamps = np.array([s for s, _ in track])
-            ref = stamps.min()
-            at, ok = interpolate_poses(stamps - ref, np.array([p for _, p in track]), times - ref)
-            poses = compose(at, poses)
-            inside &= ok
-            moving += 1
-        else:
-            return poses, inside, frame, moving
-        if parent in seen:
-            raise InputError(path, f"the tf tree has a loop through '{parent}'")
-        seen.add(parent)
-        frame = parent
 
 
 def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Recording:
@@ -654,8 +446,8 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
     if laser_mount is not None:
         tf_start, tf_mount = base_frame, laser_mount
     else:
-        tf_start, tf_mount, _ = _static_chain(c, laser_frame)
-    tf_result = _tf_poses(c, path, tf_start, tf_mount, stamps) if c.dynamic else None
+        tf_start, tf_mount, _ = c.tf.static_chain(laser_frame)
+    tf_result = c.tf.poses_in_root(tf_start, tf_mount, stamps, source=path) if c.tf.dynamic else None
     has_tf = tf_result is not None and tf_result[3] > 0
 
     source = pose_source
@@ -668,7 +460,7 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
         if not has_tf:
             raise InputError(path, f"pose source 'tf': no /tf transforms reaching the laser frame '{laser_frame}'")
         poses, inside, fixed_frame, _ = tf_result
-        mount_base = base_frame if base_frame in _static_chain(c, laser_frame)[2] else tf_start
+        mount_base = base_frame if base_frame in c.tf.static_chain(laser_frame)[2] else tf_start
         mount = _mount_on(c, path, laser_frame, mount_base, laser_mount)
         base_frame = mount_base
     else:
@@ -696,7 +488,7 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
         k = np.array(c.cmd)
         cmd_vel = Trajectory(k[:, 0], np.zeros((len(k), 3)), frame_id=base_frame, child_frame_id=base_frame,
                              twists=k[:, 1:3])
-    ground_truth = _grid_from_message(c.grid, path) if c.grid is not None else None
+    ground_truth = grid_from_message(c.grid, path, MAP_TOPIC) if c.grid is not None else None
     meta = {
         "source": str(path), "format": fmt, "scan_topic": c.scan_topic, "pose_source": source,
         "scans_total": n_total, "scans_dropped": int(n_total - inside.sum()),
@@ -705,20 +497,7 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
     }
     if c.range_limits_vary:
         meta["range_limits_vary"] = True
-    if c.tf_conflicts:
-        meta["tf_conflicts"] = c.tf_conflicts
+    if c.tf.conflicts:
+        meta["tf_conflicts"] = c.tf.conflicts
     return Recording(scans=scans, laser_mount=tuple(float(v) for v in mount), odometry=odometry,
                      true_poses=true_poses, cmd_vel=cmd_vel, ground_truth=ground_truth, meta=meta)
-
-
-def _grid_from_message(msg, path):
-    info = msg.info
-    data = np.asarray(msg.data, dtype=np.int8)
-    if data.size != int(info.width) * int(info.height) or data.size == 0:
-        raise InputError(path, f"{MAP_TOPIC}: {data.size} cells for a {info.width} x {info.height} grid")
-    resolution = float(str(np.float32(info.resolution)))  # undo the float32 of MapMetaData: 0.05, not 0.0500000007
-    try:
-        return OccupancyGrid.from_int8(data.reshape(int(info.height), int(info.width)), resolution=resolution,
-                                       origin=_pose_of(info.origin), frame_id=msg.header.frame_id or "map")
-    except InputError as exc:
-        raise InputError(path, f"{MAP_TOPIC}: {exc.problem}") from None

@@ -9,7 +9,7 @@ map_server maps
     A loaded grid holds the OccupancyGrid values the map server would publish, divided by
     100 (unknown, -1, becomes 0.5).
 
-``.npy`` grids
+``.npy`` grids (:mod:`crfmap.npyio`; ``save_npy``, ``load_npy`` and ``npy_sidecar_path`` are importable here too)
     The float P(occupied) array itself, bit for bit, plus a small sidecar YAML
     ``<name>.npy.yaml`` holding resolution, origin and frame_id (a plain ``.npy`` cannot).
 
@@ -21,17 +21,18 @@ map_server maps
 from __future__ import annotations
 
 import json
-import math
 import re
 from pathlib import Path
 
 import numpy as np
-import yaml
 from PIL import Image, UnidentifiedImageError
 
+from ._yamlio import finite_number, format_number, read_mapping
+from ._yamlio import write_text as _write_text  # looked up here at call time, so a test can make it fail
 from .atomic import atomic_path
 from .errors import InputError
 from .grid import OccupancyGrid
+from .npyio import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
 
 MAP_MODES = ("trinary", "scale", "raw")
 MAP_SUFFIXES = (".yaml", ".yml")
@@ -57,47 +58,12 @@ _PNM_BINARY_HEADER = re.compile(rb"\A(P[56])" + (_PNM_SEP + rb"(\d+)") * 3 + rb"
 
 
 # --- reading the YAML -----------------------------------------------------------------------
-def _number(value, source, key):
-    """A finite float from a YAML value (yaml-cpp's ``as<double>`` also takes quoted numbers)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-        raise InputError(source, f"key '{key}' must be a number, got {value!r}")
-    try:
-        number = float(value)
-    except ValueError:
-        raise InputError(source, f"key '{key}' must be a number, got {value!r}") from None
-    if not math.isfinite(number):
-        raise InputError(source, f"key '{key}' must be finite, got {value!r}")
-    return number
-
-
 def _check_thresholds(occupied, free, source):
     for key, value in (("occupied_thresh", occupied), ("free_thresh", free)):
         if not 0.0 <= value <= 1.0:
             raise InputError(source, f"'{key}' must lie in [0, 1], got {value:g}")
     if not free < occupied:
         raise InputError(source, f"free_thresh ({free:g}) must be smaller than occupied_thresh ({occupied:g})")
-
-
-def _read_yaml_mapping(path, what):
-    path = Path(path)
-    if not path.exists():
-        raise InputError(path, f"{what} not found")
-    if path.is_dir():
-        raise InputError(path, f"is a folder, expected {what}")
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, "not a text file (expected YAML)") from None
-    except OSError as exc:
-        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).replace("\n", " ")
-        raise InputError(path, f"not valid YAML{where}: {problem}") from None
-    if not isinstance(doc, dict):
-        raise InputError(path, f"expected a YAML mapping of keys ({what}), got {type(doc).__name__}")
-    return doc
 
 
 def read_map_yaml(yaml_path) -> dict:
@@ -114,20 +80,20 @@ def read_map_yaml(yaml_path) -> dict:
     0.05
     """
     path = Path(yaml_path)
-    doc = _read_yaml_mapping(path, "map YAML file")
+    doc = read_mapping(path, "map YAML file")
     for key in _REQUIRED_KEYS:
         if key not in doc:
             raise InputError(path, f"missing key '{key}'")
     image = doc["image"]
     if not isinstance(image, str) or not image.strip():
         raise InputError(path, f"key 'image' must be an image file name, got {image!r}")
-    resolution = _number(doc["resolution"], path, "resolution")  # [m/cell]
+    resolution = finite_number(doc["resolution"], path, "resolution")  # [m/cell]
     if resolution <= 0:
         raise InputError(path, f"key 'resolution' must be positive (metres per cell), got {resolution:g}")
     origin = doc["origin"]
     if not isinstance(origin, (list, tuple)) or len(origin) != 3:
         raise InputError(path, f"key 'origin' must be a list [x, y, yaw] of 3 numbers, got {origin!r}")
-    origin = tuple(_number(v, path, "origin") for v in origin)
+    origin = tuple(finite_number(v, path, "origin") for v in origin)
     negate = doc["negate"]
     if isinstance(negate, str) and negate.strip().lower() in ("0", "1", "true", "false"):
         negate = negate.strip().lower() in ("1", "true")
@@ -135,8 +101,8 @@ def read_map_yaml(yaml_path) -> dict:
         negate = int(negate)
     else:
         raise InputError(path, f"key 'negate' must be 0, 1, true or false, got {negate!r}")
-    occupied = _number(doc["occupied_thresh"], path, "occupied_thresh")
-    free = _number(doc["free_thresh"], path, "free_thresh")
+    occupied = finite_number(doc["occupied_thresh"], path, "occupied_thresh")
+    free = finite_number(doc["free_thresh"], path, "free_thresh")
     _check_thresholds(occupied, free, path)
     mode = doc.get("mode", "trinary")
     if mode not in MAP_MODES:
@@ -289,20 +255,6 @@ def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None) -> OccupancyG
 
 
 # --- writing ------------------------------------------------------------------------------
-def _format_number(value) -> str:
-    """A float as YAML text that reads back to the same float.
-
-    yaml-cpp (nav2) prints ``0`` and ``0.05``; it uses 3 significant digits, which loses
-    origins like -12.3456 -- we print the shortest exact form instead (same text whenever
-    3 digits suffice). Exponents get a '.0' so PyYAML reads them as floats too.
-    """
-    text = repr(float(value))
-    if "e" in text:
-        mantissa, exponent = text.split("e")
-        return f"{mantissa if '.' in mantissa else mantissa + '.0'}e{exponent}"
-    return text[:-2] if text.endswith(".0") else text
-
-
 def _format_name(name: str) -> str:
     if re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.+\-]*", name):
         return name
@@ -321,10 +273,10 @@ def map_yaml_text(image_name, mode, resolution, origin, occupied_thresh, free_th
     occupied_thresh: 0.65
     free_thresh: 0.196
     """
-    origin_text = ", ".join(_format_number(v) for v in origin)
-    return (f"image: {_format_name(image_name)}\nmode: {mode}\nresolution: {_format_number(resolution)}\n"
-            f"origin: [{origin_text}]\nnegate: 0\noccupied_thresh: {_format_number(occupied_thresh)}\n"
-            f"free_thresh: {_format_number(free_thresh)}")
+    origin_text = ", ".join(format_number(v) for v in origin)
+    return (f"image: {_format_name(image_name)}\nmode: {mode}\nresolution: {format_number(resolution)}\n"
+            f"origin: [{origin_text}]\nnegate: 0\noccupied_thresh: {format_number(occupied_thresh)}\n"
+            f"free_thresh: {format_number(free_thresh)}")
 
 
 def _pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
@@ -440,99 +392,6 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
         raise
     return yaml_path, image_path
 
-
-def _write_text(path, text):
-    with open(path, "w", encoding="utf-8", newline="\n") as f:
-        f.write(text)
-
-
-# --- .npy grids ---------------------------------------------------------------------------
-def npy_sidecar_path(npy_path) -> Path:
-    """The metadata file of an ``.npy`` grid: ``map.npy`` -> ``map.npy.yaml``.
-
-    Not ``map.yaml``, which would clash with a map_server map of the same name.
-    """
-    npy_path = Path(npy_path)
-    return npy_path.with_name(npy_path.name + ".yaml")
-
-
-def save_npy(grid: OccupancyGrid, path) -> Path:
-    """Save P(occupied) exactly as a 2-D float ``.npy`` [y, x] plus its sidecar YAML.
-
-    The sidecar (:func:`npy_sidecar_path`) holds ``resolution``, ``origin`` and
-    ``frame_id``; both files are written atomically, array first.
-
-    >>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
-    PosixPath('g.npy')
-    """
-    path = Path(path)
-    if path.suffix.lower() != ".npy":
-        raise InputError(path, "an .npy grid file must end in .npy")
-    if not isinstance(grid, OccupancyGrid):
-        raise InputError(path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
-    sidecar = npy_sidecar_path(path)
-    text = (f"# crfmap grid metadata for {path.name}: P(occupied) as float [y, x], row 0 = lowest y\n"
-            f"resolution: {_format_number(grid.resolution)}\n"
-            f"origin: [{', '.join(_format_number(v) for v in grid.origin)}]\n"
-            f"frame_id: {json.dumps(grid.frame_id)}\n")
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as f:  # a file object: np.save would append .npy to a name
-            np.save(f, np.ascontiguousarray(grid.probability), allow_pickle=False)
-    with atomic_path(sidecar) as tmp:
-        _write_text(tmp, text)
-    return path
-
-
-def _read_sidecar(sidecar):
-    doc = _read_yaml_mapping(sidecar, "crfmap .npy metadata (resolution, origin, frame_id)")
-    resolution = _number(doc.get("resolution", 1.0), sidecar, "resolution")
-    if resolution <= 0:
-        raise InputError(sidecar, f"key 'resolution' must be positive, got {resolution:g}")
-    origin = doc.get("origin", [0.0, 0.0, 0.0])
-    if not isinstance(origin, (list, tuple)) or len(origin) not in (2, 3):
-        raise InputError(sidecar, f"key 'origin' must be a list [x, y, yaw], got {origin!r}")
-    origin = tuple(_number(v, sidecar, "origin") for v in origin)
-    frame_id = doc.get("frame_id", "map")
-    if not isinstance(frame_id, str):
-        raise InputError(sidecar, f"key 'frame_id' must be a string, got {frame_id!r}")
-    return resolution, origin, frame_id
-
-
-def load_npy(path) -> OccupancyGrid:
-    """Load a P(occupied) ``.npy`` grid (2-D float in [0, 1]) and its sidecar if present.
-
-    Without a sidecar: resolution 1 m, origin (0, 0, 0), frame ``map``.
-
-    >>> load_npy("g.npy").shape  # doctest: +SKIP
-    (2, 3)
-    """
-    path = Path(path)
-    if not path.exists():
-        raise InputError(path, ".npy grid file not found")
-    try:
-        arr = np.load(path, allow_pickle=False)
-    except ValueError as exc:
-        raise InputError(path, f"not a plain .npy array ({exc})") from None
-    except (OSError, EOFError) as exc:
-        raise InputError(path, f"unreadable .npy file ({exc})") from None
-    if not isinstance(arr, np.ndarray):
-        arr.close()
-        raise InputError(path, "is an .npz archive, expected a single .npy array")
-    if arr.ndim != 2:
-        raise InputError(path, f"expected a 2-D array [y, x], got shape {arr.shape}")
-    if arr.size == 0:
-        raise InputError(path, f"empty grid (shape {arr.shape})")
-    if not np.issubdtype(arr.dtype, np.floating):
-        raise InputError(path, f"expected float probabilities, got dtype {arr.dtype}")
-    if np.isnan(arr).any():
-        raise InputError(path, f"{int(np.isnan(arr).sum())} cell(s) are NaN")
-    lo, hi = float(arr.min()), float(arr.max())
-    if lo < 0.0 or hi > 1.0:
-        raise InputError(path, f"values must be probabilities in [0, 1], found range [{lo:g}, {hi:g}]")
-    sidecar = npy_sidecar_path(path)
-    resolution, origin, frame_id = _read_sidecar(sidecar) if sidecar.exists() else (1.0, (0.0, 0.0, 0.0), "map")
-    return OccupancyGrid(arr, resolution=resolution, origin=origin, frame_id=frame_id,
-                         meta={"source": str(path)})
 
 
 # --- by suffix ----------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""Ground-truth scenes for the experiments of thesis sec. 4.1, and where a robot can go in them.
+"""Ground-truth scenes for the experiments of thesis sec. 4.1: the grid and where the robot starts.
 
 A scene is a 0/1 :class:`~crfmap.grid.OccupancyGrid` (P(occupied) 1.0 for walls, 0.0 for
 free space, nothing unknown) plus a start pose of the robot in a free cell it can move
@@ -17,7 +17,11 @@ Scenes, by name (:data:`SCENES`, :func:`make_scene`):
 - ``enclosed-train`` / ``enclosed-test``: a room with filled boxes the robot cannot enter
   (Fig. 36 / Fig. 37); ``hollow-train`` / ``hollow-test``: the same with unfilled
   (enclosed, empty-centred) boxes (Fig. 40).
-- ``office``: a procedurally generated floor of rooms, doors and corridors, any size.
+- ``office``: a procedurally generated floor of rooms, doors and corridors, any size
+  (:mod:`crfmap.office`).
+
+Where a robot can go in a scene (``traversable``, ``reachable``, ...) is
+:mod:`crfmap.reachability`; those names are importable from here too.
 
 >>> scene = occluded_walls("train")
 >>> scene.truth.shape, scene.truth.resolution
@@ -30,10 +34,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from .errors import InputError
 from .grid import OccupancyGrid
+from .office import office_floor
+from .reachability import footprint_offsets, pose_cell, reachable, traversable  # noqa: F401  (re-exported)
 
 X_IMAGE_FILE = "images/ugm_X_32x32.csv"  # 1 = white background, 0 = X stroke (UGM's X.mat)
 THESIS_SIZE = 40  # [cells] side of the thesis-style scenes
@@ -70,16 +75,6 @@ class Scene:
 
 
 # --- small helpers -------------------------------------------------------------------
-def pose_cell(grid: OccupancyGrid, pose) -> tuple:
-    """Integer cell (ix, iy) containing the point ``pose[:2]`` [m], or InputError if outside the grid."""
-    fx, fy = grid.world_to_cell(pose[0], pose[1])
-    ix, iy = int(math.floor(float(fx))), int(math.floor(float(fy)))
-    if not (0 <= ix < grid.width and 0 <= iy < grid.height):
-        raise InputError("start", f"position ({pose[0]:g}, {pose[1]:g}) m lies outside the "
-                                  f"{grid.width}x{grid.height} grid")
-    return ix, iy
-
-
 def _cell_pose(ix, iy, resolution, yaw=0.0) -> tuple:
     """Pose at the centre of cell (ix, iy) of a grid whose origin is (0, 0, 0)."""
     return ((ix + 0.5) * resolution, (iy + 0.5) * resolution, float(yaw))
@@ -95,6 +90,12 @@ def _check_variant(variant) -> str:
     if variant not in ("train", "test"):
         raise InputError("variant", f"must be 'train' or 'test', got {variant!r}")
     return variant
+
+
+def _check_size(size) -> int:
+    if not isinstance(size, (int, np.integer)) or size < 20:
+        raise InputError("size", f"must be an integer of at least 20 cells, got {size!r}")
+    return int(size)
 
 
 def _fill(cells, x0, y0, x1, y1, value=1):
@@ -275,9 +276,7 @@ def occluded_walls(variant="train", size=THESIS_SIZE, resolution=THESIS_RESOLUTI
     """
     variant = _check_variant(variant)
     resolution = _check_resolution(resolution)
-    if not isinstance(size, (int, np.integer)) or size < 20:
-        raise InputError("size", f"must be an integer of at least 20 cells, got {size!r}")
-    size = int(size)
+    size = _check_size(size)
     rng = np.random.default_rng(seed) if seed is not None else None
     scale = size / THESIS_SIZE
     cells = np.zeros((size, size), np.uint8)
@@ -352,9 +351,7 @@ def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=T
     """
     variant = _check_variant(variant)
     resolution = _check_resolution(resolution)
-    if not isinstance(size, (int, np.integer)) or size < 20:
-        raise InputError("size", f"must be an integer of at least 20 cells, got {size!r}")
-    size = int(size)
+    size = _check_size(size)
     scale = size / THESIS_SIZE
     if seed is None:
         boxes = [tuple(int(round(v * scale)) for v in b) for b in _BOX_LAYOUTS[variant]]
@@ -377,242 +374,6 @@ def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=T
         default_mode="explore",
         waypoints=_corner_loop(size, size, resolution),
     )
-
-
-# --- a procedural office floor -----------------------------------------------------------
-def _split(rng, total, lo, hi, wall):
-    """Split ``total`` cells into parts of lo..hi cells separated by ``wall`` cells; the last absorbs the rest."""
-    parts = []
-    left = total
-    while left > 0:
-        if left <= hi or left - wall < 2 * lo:
-            size = left
-        else:
-            size = int(rng.integers(lo, min(hi, left - wall - lo) + 1))
-        parts.append(size)
-        left -= size + wall
-    if len(parts) > 1 and parts[-1] < lo:  # too thin: give it to its neighbour (the wall goes too)
-        last = parts.pop()
-        parts[-1] += wall + last
-    return parts
-
-
-def office_floor(width_m=20.0, height_m=15.0, resolution=0.05, seed=0, robot_radius=0.15) -> Scene:
-    """A procedurally generated office floor: rooms with doors and desks along corridors.
-
-    Layout (y up): a vertical corridor along the left wall joins horizontal corridors;
-    each horizontal corridor has a row of rooms below and above it. Rooms are 2.5-4.5 m
-    wide and 2.5-4.5 m deep; every room has a 0.9 m door onto its corridor, some have a
-    door to the next room, and most have a desk against the back wall. Walls are 0.15 m.
-    The robot starts where the first corridor meets the left corridor, facing +x; the
-    waypoints visit every room centre, corridor by corridor (``default_mode="waypoints"``).
-
-    Parameters
-    ----------
-    width_m, height_m : float [m], at least about 6 m x 5 m
-    resolution : float [m/cell]
-    seed : int, the layout's random seed
-    robot_radius : float [m], used to check that every room can be reached
-
-    >>> s = office_floor(12.0, 10.0, 0.1, seed=3)
-    >>> s.truth.shape, len(s.waypoints) >= 2
-    ((100, 120), True)
-    """
-    res = _check_resolution(resolution)
-    for name, v in (("width_m", width_m), ("height_m", height_m)):
-        if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
-            raise InputError(name, f"must be a positive number of metres, got {v!r}")
-    rng = np.random.default_rng(seed)
-    cells_of = lambda metres, least=1: max(least, int(round(metres / res)))  # noqa: E731
-    t = cells_of(0.15)  # wall
-    cw = cells_of(1.6, 3)  # corridor width
-    door = cells_of(0.9, 2)
-    room_lo, room_hi = cells_of(2.5, 4), cells_of(4.5, 5)
-    desk_w, desk_d = cells_of(1.4, 2), cells_of(0.7, 1)
-    W, H = int(round(width_m / res)), int(round(height_m / res))
-    min_w, min_h = 3 * t + cw + room_lo, 3 * t + cw + room_lo
-    if W < min_w:
-        raise InputError("width_m", f"an office needs at least {min_w * res:.2f} m at {res} m/cell, got {width_m}")
-    if H < min_h:
-        raise InputError("height_m", f"an office needs at least {min_h * res:.2f} m at {res} m/cell, got {height_m}")
-    cells = np.ones((H, W), np.uint8)  # carve free space out of solid
-    spine = (t, t + cw - 1)  # x range of the left corridor
-    cells[t : H - t, spine[0] : spine[1] + 1] = 0
-    x_rooms = spine[1] + 1 + t  # first room column
-    # Horizontal bands: blocks of [rooms, wall, corridor, wall, rooms] separated by walls.
-    inner = H - 2 * t
-    block = 2 * (room_lo + room_hi) // 2 + cw + 3 * t
-    n_blocks = max(1, int(round(inner / block)))
-    while n_blocks > 1 and inner - n_blocks * (cw + 3 * t) + t < 2 * n_blocks * room_lo:
-        n_blocks -= 1
-    depth_total = inner - n_blocks * (cw + 2 * t) - (n_blocks - 1) * t
-    two_rows = depth_total >= 2 * n_blocks * room_lo
-    n_rows = 2 * n_blocks if two_rows else 1
-    depths = np.full(n_rows, depth_total // n_rows)
-    depths[: depth_total - depths.sum()] += 1
-    rooms = []  # (x0, y0, x1, y1, corridor index, door side: +1 corridor above, -1 below)
-    corridors = []
-    y = t
-    for b in range(n_blocks):
-        rows_here = [(depths[2 * b], +1), (depths[2 * b + 1], -1)] if two_rows else [(depths[0], +1)]
-        # row below the corridor
-        d, side = rows_here[0]
-        row_below = (y, y + d - 1)
-        y += d + t
-        corridor = (y, y + cw - 1)
-        corridors.append(corridor)
-        cells[corridor[0] : corridor[1] + 1, spine[0] : W - t] = 0
-        y += cw + t
-        rows = [(row_below, +1)]
-        if two_rows:
-            d, _ = rows_here[1]
-            rows.append(((y, y + d - 1), -1))
-            y += d + t
-        for (ya, yb), side in rows:
-            x = x_rooms
-            for wdt in _split(rng, W - t - x_rooms, room_lo, room_hi, t):
-                rooms.append((x, ya, x + wdt - 1, yb, b, side))
-                x += wdt + t
-    if not two_rows:  # one row of rooms below the corridor; the rest above it is open floor
-        cells[corridors[0][1] + 1 : H - t, spine[0] : W - t] = 0
-    for i, (x0, y0, x1, y1, b, side) in enumerate(rooms):
-        cells[y0 : y1 + 1, x0 : x1 + 1] = 0
-        width = x1 - x0 + 1
-        dw = min(door, width - 2)
-        dx = int(rng.integers(x0 + 1, x1 - dw + 2)) if width - dw > 2 else x0 + 1
-        wall_rows = range(y1 + 1, y1 + 1 + t) if side > 0 else range(y0 - t, y0)
-        for wy in wall_rows:
-            cells[wy, dx : dx + dw] = 0
-        nxt = rooms[i + 1] if i + 1 < len(rooms) else None
-        if nxt is not None and nxt[1] == y0 and rng.random() < 0.3:  # a door to the next room in the row
-            dy = y0 + (y1 - y0) // 2 - door // 2
-            cells[max(y0 + 1, dy) : min(y1, dy + door), x1 + 1 : x1 + 1 + t] = 0
-        if rng.random() < 0.7 and width > desk_w + 2 and (y1 - y0 + 1) > 3 * desk_d:
-            desk_x = int(rng.integers(x0 + 1, x1 - desk_w + 1))
-            if side > 0:  # corridor above: the back wall is below
-                cells[y0 : y0 + desk_d, desk_x : desk_x + desk_w] = 1
-            else:
-                cells[y1 - desk_d + 1 : y1 + 1, desk_x : desk_x + desk_w] = 1
-    truth = _grid(cells, res, scene="office", seed=seed, width_m=width_m, height_m=height_m)
-    start = ((spine[0] + spine[1] + 1) / 2 * res, (corridors[0][0] + corridors[0][1] + 1) / 2 * res, 0.0)
-    ordered = []
-    for b in range(len(corridors)):
-        here = sorted((r for r in rooms if r[4] == b), key=lambda r: (r[0], r[1]), reverse=bool(b % 2))
-        ordered += [((r[0] + r[2] + 1) / 2 * res, (r[1] + r[3] + 1) / 2 * res) for r in here]
-    can_reach = reachable(truth, start, robot_radius)
-    waypoints = [p for p in ordered if can_reach[pose_cell(truth, p)[::-1]]]
-    return Scene(
-        name="office",
-        truth=truth,
-        start=start,
-        description=f"{width_m:g} m x {height_m:g} m office floor (seed {seed}): {len(rooms)} rooms, "
-        f"{len(corridors)} corridor(s)",
-        default_mode="waypoints",
-        waypoints=np.asarray(waypoints, dtype=np.float64).reshape(-1, 2),
-        robot_radius=float(robot_radius),
-    )
-
-
-# --- reachability --------------------------------------------------------------------
-def footprint_offsets(robot_radius, resolution) -> np.ndarray:
-    """Offsets (dx, dy) [cells] of the cells a disc of ``robot_radius`` [m] centred in cell (0, 0) overlaps.
-
-    A cell at offset (dx, dy) is overlapped when the distance from the disc's centre to the
-    nearest point of that cell's square is below the radius. (0, 0) is always included.
-
-    >>> footprint_offsets(0.0, 0.1).tolist()
-    [[0, 0]]
-    >>> len(footprint_offsets(0.06, 0.1))  # the 4 side neighbours (0.05 m away) join, corners (0.07 m) do not
-    5
-    """
-    r = float(robot_radius) / float(resolution)
-    k = int(math.ceil(r + 0.5))
-    d = np.arange(-k, k + 1)
-    dx, dy = np.meshgrid(d, d)
-    gap = np.hypot(np.maximum(np.abs(dx) - 0.5, 0.0), np.maximum(np.abs(dy) - 0.5, 0.0))
-    keep = (gap < r) | ((dx == 0) & (dy == 0))
-    return np.stack([dx[keep], dy[keep]], axis=1)
-
-
-def traversable(truth, robot_radius=0.0) -> np.ndarray:
-    """Boolean [y, x] mask of cells where a disc robot of ``robot_radius`` [m] fits (touches no occupied cell).
-
-    Occupied means P > 0.5; outside the grid counts as occupied (the robot stays on the map).
-
-    >>> occ = np.zeros((7, 7)); occ[3, 3] = 1
-    >>> int(traversable(OccupancyGrid(occ, 0.1), 0.06).sum())  # not: the border ring, the wall, its 4 neighbours
-    20
-    """
-    grid = truth.truth if isinstance(truth, Scene) else truth
-    if not isinstance(grid, OccupancyGrid):
-        grid = OccupancyGrid(np.asarray(truth, dtype=float))
-    if not (isinstance(robot_radius, (int, float, np.floating)) and math.isfinite(robot_radius) and robot_radius >= 0):
-        raise InputError("robot_radius", f"must be a non-negative number of metres, got {robot_radius!r}")
-    occ = grid.probability > 0.5
-    offsets = footprint_offsets(robot_radius, grid.resolution)
-    k = int(np.abs(offsets).max())
-    if k == 0:
-        return ~occ
-    h, w = occ.shape
-    padded = np.ones((h + 2 * k, w + 2 * k), dtype=bool)
-    padded[k : k + h, k : k + w] = occ
-    blocked = np.zeros_like(occ)
-    for dx, dy in offsets:
-        blocked |= padded[k + dy : k + dy + h, k + dx : k + dx + w]
-    return ~blocked
-
-
-@njit(cache=True)
-def _flood_fill(free, sx, sy):
-    """Cells 4-connected to (sx, sy) through ``free`` cells (the start must be free)."""
-    h, w = free.shape
-    seen = np.zeros((h, w), dtype=np.bool_)
-    stack = np.empty((h * w, 2), dtype=np.int64)
-    seen[sy, sx] = True
-    stack[0, 0] = sx
-    stack[0, 1] = sy
-    top = 1
-    while top > 0:
-        top -= 1
-        x = stack[top, 0]
-        y = stack[top, 1]
-        for k in range(4):
-            nx = x + (1 if k == 0 else (-1 if k == 1 else 0))
-            ny = y + (1 if k == 2 else (-1 if k == 3 else 0))
-            if 0 <= nx < w and 0 <= ny < h and free[ny, nx] and not seen[ny, nx]:
-                seen[ny, nx] = True
-                stack[top, 0] = nx
-                stack[top, 1] = ny
-                top += 1
-    return seen
-
-
-def reachable(truth, start, robot_radius=0.0) -> np.ndarray:
-    """Boolean [y, x] mask of the cells a disc robot can reach from ``start`` by moving between side neighbours.
-
-    A cell is traversable when the robot (a disc of ``robot_radius`` metres centred in the
-    cell) overlaps no occupied cell (:func:`traversable`); moves go to the 4 side
-    neighbours, so the robot never slips through a diagonal gap. Cells inside enclosed
-    boxes are not reachable.
-
-    Parameters
-    ----------
-    truth : OccupancyGrid (or Scene)
-    start : (x [m], y [m][, yaw]) in the grid's frame
-    robot_radius : float [m]
-
-    >>> s = enclosed_boxes("train")
-    >>> m = reachable(s.truth, s.start)
-    >>> bool(m[7, 7]), bool(m[s.start_cell()[1], s.start_cell()[0]])
-    (False, True)
-    """
-    grid = truth.truth if isinstance(truth, Scene) else truth
-    free = traversable(grid, robot_radius)
-    sx, sy = pose_cell(grid, start)
-    if not free[sy, sx]:
-        raise InputError("start", f"cell ({sx}, {sy}) is occupied or too close to a wall for a robot of radius "
-                                  f"{robot_radius} m")
-    return _flood_fill(free, sx, sy)
 
 
 # --- names ---------------------------------------------------------------------------
