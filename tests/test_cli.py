@@ -116,3 +116,12 @@ def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, args, word
         assert w in err
     assert not (tmp_path / "o.npy").exists() and not (tmp_path / "o.txt").exists()
     assert not list(tmp_path.glob(".*tmp"))
+
+
+@pytest.mark.parametrize("argv", [["simulate", "nope", "out"], ["infer"], [], ["infer", "a.npy", "b.npy", "--max-iter", "x"]])
+def test_usage_errors_are_one_line(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "error" in err

@@ -15,8 +15,15 @@ from .errors import CrfmapError
 COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (plus where to find help), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="crfmap",
         description="Clean and complete occupancy grids with CRFs and loopy belief propagation.",
     )
