@@ -1,0 +1,527 @@
+"""How fast crfmap's LBP runs, measured against a vectorised NumPy baseline in the same run.
+
+:func:`run` yields one record (a dict) per measurement; ``crfmap bench`` prints them (``--json``:
+one JSON object per line). Every record has ``method``, ``size`` (cells per side, or None),
+``dtype``, ``threads``, ``seconds_per_iteration`` and ``mcells_per_second`` (None where they do
+not apply); convergence records add ``iterations`` and ``seconds_to_converge``. Times are
+medians over ``repeats``; the first call of each kernel (JIT compilation or loading numba's
+cache) is timed apart, in ``compile`` records.
+
+Methods:
+
+- ``numpy-baseline``: THE BASELINE, :class:`NumpyCheckerboard`, written here: the same
+  checkerboard schedule, one odds ratio per message, float32, whole-array NumPy operations.
+- ``crfmap-fast``: the fast kernels (:mod:`crfmap._lbp_fast`), blocks of ``block`` iterations
+  per trip through memory; ``-general`` with a non-symmetric table, ``-bounded`` on a disc
+  (bounded LBP) covering about half the grid; ``crfmap-infer``: :func:`crfmap.lbp.infer`
+  end to end (packing, iterations, beliefs, unpacking).
+- ``crfmap-plain``: the reference kernels (:mod:`crfmap._lbp_kernels`), small grids only.
+- ``memory-bandwidth``: a streaming triad over 2 x 256 MB; ``bound_mcells_per_second`` is the
+  rate at which one pass per iteration (36 bytes per cell in float32) would saturate it.
+- ``converge``: noisy office floors (flip noise 0.2), table [[10, 1], [1, 10]], until the
+  largest message change is below 1e-4: fast kernel with frozen tiles (default), exact
+  (``freeze=0``), and the plain kernel on small grids, with the largest belief difference.
+- ``online-intel`` / ``online-intel-final`` / ``builder-intel``: the Intel lab log at 5 cm
+  (when the data is present): scan-by-scan mapping, the final map against an offline run.
+- ``memory``: peak resident memory of :func:`crfmap.lbp.infer` per cell, in a child process.
+- ``jit-compile``: the first calls of :func:`crfmap.lbp.infer` in a new process, with an empty
+  numba cache (compilation; not in quick runs) and with the package's cache.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+from numba import njit, prange
+
+from . import _lbp_packed as F
+from .lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, infer
+from .potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables, link_unary
+
+SIZES = (256, 512, 1024, 2048, 4096, 8192)
+QUICK_SIZES = (128, 256)
+CONVERGE_SIZES = (256, 512, 1024, 2048, 4096)
+QUICK_CONVERGE_SIZES = (128, 256)
+CONVERGE_TOL = 1e-4
+BYTES_PER_CELL_PASS = {"float32": 36, "float64": 72}  # read 4 messages + observation, write 4 messages
+GENERAL_TABLE = np.array([[3.0, 0.7], [1.3, 2.5]])  # non-symmetric (receiver pairing)
+EQUALITY_TABLE = np.array([[2.0, 1.0], [1.0, 2.0]])  # LBP converges on the Intel grid with it
+INTEL = "carmen/intel-corrected.log.gz"
+
+
+# --- the baseline -----------------------------------------------------------------------------
+
+
+class NumpyCheckerboard:
+    """THE BASELINE: checkerboard LBP in vectorised NumPy, one odds ratio per message.
+
+    Same model, schedule and floors as :func:`crfmap.lbp.infer` (cells with even x + y send,
+    then the others); each half-sweep is four strided sub-lattices (even/odd rows) updated
+    with whole-array operations: ``r' = (t00 R + t01) / (t10 R + t11)`` with R the sender's
+    cavity odds. Messages are ``m[d, y, x]`` as in :mod:`crfmap._lbp_kernels`, as odds.
+
+    A good NumPy implementation: float32, no Python loop over cells, chunks of about
+    CHUNK_CELLS cells of a sub-lattice at a time so the temporaries stay in cache.
+
+    >>> nb = NumpyCheckerboard(np.array([[0.9, 0.5, 0.9]]))
+    >>> nb.iterate(20)
+    >>> bool(nb.beliefs()[0, 1] > 0.5)
+    True
+    """
+
+    CHUNK_CELLS = 1 << 16
+
+    def __init__(self, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, dtype=np.float32, pairing="receiver"):
+        observed = np.asarray(observed, np.float64)
+        self.h, self.w = observed.shape
+        self.dtype = np.dtype(dtype)
+        u = np.clip(link_unary(observed, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR)
+        self.U = (u / (1.0 - u)).astype(self.dtype)
+        self.m = np.ones((4, self.h, self.w), self.dtype)
+        tables = directional_tables(hidden, pairing)
+        tables = tables / tables.max()
+        self.t = [tuple(self.dtype.type(v) for v in t.ravel()) for t in tables]
+        co = F.odds_coefficients(tables, np.float64, MESSAGE_FLOOR)
+        self.clamp = co[9] != 0
+        self.lo = self.dtype.type(MESSAGE_FLOOR / (1.0 - MESSAGE_FLOOR))
+        self.hi = self.dtype.type((1.0 - MESSAGE_FLOOR) / MESSAGE_FLOOR)
+
+    def _message(self, d, R):
+        t00, t01, t10, t11 = self.t[d]
+        r = (t00 * R + t01) / (t10 * R + t11)
+        return np.clip(r, self.lo, self.hi, out=r) if self.clamp else r
+
+    def _send(self, ry, cx, i0, i1):
+        """Cells in rows ry + 2i (i0 <= i < i1) and columns cx, cx + 2, ... send their 4 messages."""
+        m, w = self.m, self.w
+        rows = slice(ry + 2 * i0, ry + 2 * i1, 2)
+        U = self.U[rows, cx::2]
+        r0, r1, r2, r3 = (m[d, rows, cx::2] for d in range(4))
+        p = U * r2 * r3  # cavity odds without the east and west messages
+        q = U * r0 * r1  # without the north and south ones
+        nc = U.shape[1]
+        ne = len(range(cx + 1, w, 2))  # senders with an east neighbour
+        if ne:
+            m[0, rows, cx + 1::2] = self._message(0, p[:, :ne] * r0[:, :ne])
+        if cx == 0:  # the sender at x = 0 has no west neighbour
+            if nc > 1:
+                m[1, rows, 1::2][:, :nc - 1] = self._message(1, p[:, 1:] * r1[:, 1:])
+        else:
+            m[1, rows, 0::2][:, :nc] = self._message(1, p * r1)
+        # north: sender row ry + 2i -> row ry + 2i + 1, if inside the grid
+        n_north = min(i1, len(range(ry + 1, self.h, 2))) - i0
+        if n_north > 0:
+            m[2, ry + 1 + 2 * i0:ry + 1 + 2 * (i0 + n_north):2, cx::2] = self._message(2, q[:n_north] * r2[:n_north])
+        # south: sender row ry + 2i -> row ry + 2i - 1, if inside the grid
+        first = 1 if (ry == 0 and i0 == 0) else 0
+        if i1 - i0 > first:
+            y0 = ry + 2 * (i0 + first) - 1
+            m[3, y0:ry + 2 * i1 - 1:2, cx::2] = self._message(3, q[first:] * r3[first:])
+
+    def iterate(self, n=1):
+        """n checkerboard iterations (colour 0 = even x + y sends, then colour 1)."""
+        for _ in range(n):
+            for colour in (0, 1):
+                for ry in (0, 1):
+                    rows = len(range(ry, self.h, 2))
+                    chunk = max(4, self.CHUNK_CELLS // self.w)  # row chunks keep temporaries in cache
+                    for i0 in range(0, rows, chunk):
+                        self._send(ry, (colour + ry) % 2, i0, min(i0 + chunk, rows))
+
+    def beliefs(self) -> np.ndarray:
+        b = self.U.astype(np.float64) * np.prod(self.m.astype(np.float64), axis=0)
+        return b / (1.0 + b)
+
+
+# --- inputs and machine ---------------------------------------------------------------------------
+
+
+def bench_grid(size, seed=0, kind="uniform") -> np.ndarray:
+    """An observed grid of ``size`` x ``size`` cells.
+
+    ``"uniform"``: P ~ U(0, 1) (throughput does not depend on the data); ``"office"``: a
+    procedural office floor at 5 cm (:func:`crfmap.scenes.office_floor`) seen with flip noise
+    0.2 (P = 0.8 or 0.2): LBP with [[10, 1], [1, 10]] needs ~300 iterations at 2048 x 2048.
+    """
+    if kind == "uniform":
+        return np.random.default_rng(seed).uniform(0.0, 1.0, (size, size))
+    from .scenes import noisy_image, office_floor
+
+    side = max(size, 128)  # an office needs a few metres; small grids are a corner of one
+    scene = office_floor(side * 0.05, side * 0.05, 0.05, seed=seed)
+    return noisy_image(scene.truth, 0.2, seed=seed, model="flip").probability[:size, :size].copy()
+
+
+@njit(parallel=True, cache=True)
+def _triad(a, b, c, s):
+    for i in prange(a.shape[0]):
+        a[i] = b[i] + s * c[i]
+
+
+def memory_bandwidth(threads, mbytes=256, repeats=5) -> float:
+    """Streaming bandwidth [GB/s]: a = b + s c over float64 arrays of ``mbytes`` each (3 streams)."""
+    import numba
+
+    n = mbytes * (1 << 20) // 8
+    a, b, c = np.zeros(n), np.ones(n), np.ones(n)
+    previous = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        _triad(a, b, c, 0.5)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            _triad(a, b, c, 0.5)
+            times.append(time.perf_counter() - t)
+    finally:
+        numba.set_num_threads(previous)
+    return 3 * a.nbytes / min(times) / 1e9
+
+
+# --- records ----------------------------------------------------------------------------------------
+
+
+def record(method, size=None, dtype=None, threads=None, seconds_per_iteration=None, **extra) -> dict:
+    """One benchmark result with the keys every record has."""
+    mcells = None
+    if seconds_per_iteration and size:
+        mcells = size * size / seconds_per_iteration / 1e6
+    out = dict(method=method, size=size, dtype=None if dtype is None else np.dtype(dtype).name, threads=threads,
+               seconds_per_iteration=seconds_per_iteration, mcells_per_second=mcells)
+    out.update(extra)
+    return out
+
+
+def _median_time(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
+
+
+def _with_threads(threads, fn):
+    import numba
+
+    previous = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        return fn()
+    finally:
+        numba.set_num_threads(previous)
+
+
+WORK = 2e8  # cell updates per timed repeat (quick: QUICK_WORK)
+QUICK_WORK = 2e7
+
+
+def _iterations_for(size, block, work=WORK):
+    """Iterations per timed repeat: about ``work`` cell updates, a multiple of ``block``."""
+    return max(block, int(round(work / (size * size) / block)) * block)
+
+
+def bench_fast(size, dtype, threads, repeats, hidden=DEFAULT_HIDDEN, bounded=False, block=DEFAULT_BLOCK,
+               method="crfmap-fast", work=WORK):
+    """Throughput of the fast kernel: passes of ``block`` iterations, the last of each measured."""
+    obs = bench_grid(size)
+    packed = F.PackedBlock(size, size, dtype, directional_tables(hidden), MESSAGE_FLOOR)
+    packed.set_unary(obs, DEFAULT_LINK)
+    if bounded:  # a disc of radius size / 2.5 around the centre: about half the cells
+        r = size / 2.5
+        ys = np.arange(size)
+        half = np.sqrt(np.clip(r * r - (ys + 0.5 - size / 2) ** 2, 0.0, None))
+        x_from = np.ceil(size / 2 - half - 0.5).clip(0, size).astype(np.int64)
+        x_to = np.maximum((np.floor(size / 2 + half - 0.5) + 1).clip(0, size).astype(np.int64), x_from)
+        packed.set_rows(0, x_from, x_to)
+    cells = packed.active_cells
+    n = _iterations_for(size, block, work)
+
+    def go():
+        for _ in range(n // block):
+            packed.run_pass(block, threads, measure=True, per_tile=False)
+
+    t0 = time.perf_counter()
+    _with_threads(threads, lambda: packed.run_pass(1, threads, measure=True, per_tile=False))
+    first = time.perf_counter() - t0
+    seconds = _with_threads(threads, lambda: _median_time(go, repeats)) / n
+    rec = record(method, size, dtype, threads, seconds, iterations_timed=n, block=block, first_call_seconds=first)
+    rec["mcells_per_second"] = cells / seconds / 1e6  # cells that actually send
+    rec["cells"] = cells
+    return rec
+
+
+def bench_baseline(size, repeats, dtype=np.float32):
+    nb = NumpyCheckerboard(bench_grid(size), dtype=dtype)
+    n = max(1, min(8, int(2e7 / (size * size))))
+    nb.iterate(1)
+    seconds = _median_time(lambda: nb.iterate(n), repeats) / n
+    return record("numpy-baseline", size, dtype, 1, seconds, iterations_timed=n,
+                  note="vectorised NumPy checkerboard, odds ratios (the baseline)")
+
+
+def bench_plain(size, repeats, threads):
+    obs = bench_grid(size)
+    infer(obs, max_iter=1, tol=0.0, kernel="plain", dtype=np.float32, threads=threads)
+    n = 4
+    seconds = _median_time(lambda: infer(obs, max_iter=n, tol=0.0, kernel="plain", dtype=np.float32,
+                                         threads=threads), repeats) / n
+    return record("crfmap-plain", size, np.float32, threads, seconds, iterations_timed=n)
+
+
+def bench_infer(size, dtype, threads, repeats, block=DEFAULT_BLOCK, work=WORK):
+    obs = bench_grid(size)
+    n = _iterations_for(size, block, work)
+    seconds = _median_time(lambda: infer(obs, max_iter=n, tol=0.0, dtype=dtype, threads=threads, block=block),
+                           repeats) / n
+    return record("crfmap-infer", size, dtype, threads, seconds, iterations_timed=n,
+                  note="infer() end to end: packing, iterations, beliefs, unpacking")
+
+
+def agreement(size=96, iterations=7, seed=1) -> dict:
+    """Largest belief difference between the baseline and crfmap after the same iterations."""
+    obs = bench_grid(size, seed)
+    nb = NumpyCheckerboard(obs, dtype=np.float64)
+    nb.iterate(iterations)
+    fast = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64)
+    plain = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64, kernel="plain")
+    return record("agreement", size, np.float64, None, None, iterations=iterations,
+                  max_difference_baseline_vs_fast=float(np.abs(nb.beliefs() - fast.beliefs.probability).max()),
+                  max_difference_plain_vs_fast=float(np.abs(plain.beliefs.probability - fast.beliefs.probability).max()))
+
+
+def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL):
+    """Time to convergence on the noisy office floor, with and without frozen tiles."""
+    obs = bench_grid(size, kind="office")
+    out = []
+    exact = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, freeze=0.0)
+    fast = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads)
+    fast = min((fast, infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads)), key=lambda r: r.seconds)
+    diff = float(np.abs(fast.beliefs.probability - exact.beliefs.probability).max())
+    for name, r in (("converge", fast), ("converge-exact", exact)):
+        out.append(record(f"crfmap-{name}", size, np.float32, threads, r.seconds / max(r.iterations, 1),
+                          iterations=r.iterations, seconds_to_converge=r.seconds, converged=r.converged,
+                          tol=tol, max_belief_difference_vs_exact=diff if name == "converge" else 0.0,
+                          note="Mcell/s here is cells x iterations / time: frozen tiles count but cost nothing"))
+    if with_plain:
+        plain = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, kernel="plain")
+        out.append(record("crfmap-converge-plain", size, np.float32, threads, plain.seconds / max(plain.iterations, 1),
+                          iterations=plain.iterations, seconds_to_converge=plain.seconds, converged=plain.converged,
+                          tol=tol, max_belief_difference_vs_exact=float(
+                              np.abs(plain.beliefs.probability - exact.beliefs.probability).max())))
+    return out
+
+
+def peak_memory_per_cell(size, dtype="float32", block=DEFAULT_BLOCK) -> dict:
+    """Peak memory :func:`crfmap.lbp.infer` adds beyond its float64 input, per cell (child process).
+
+    ``bytes_per_cell``: the peak resident set during the call (Linux resets its high-water mark
+    through /proc/self/clear_refs) minus the resident set before it; ``array_bytes_per_cell``:
+    the peak of the arrays it allocates (tracemalloc sees every NumPy allocation).
+    """
+    code = (
+        "import tracemalloc, numpy as np\n"
+        "from crfmap.lbp import infer\n"
+        "def status(key):\n"
+        "    for line in open('/proc/self/status'):\n"
+        "        if line.startswith(key):\n"
+        "            return int(line.split()[1]) * 1024\n"
+        f"p = np.random.default_rng(0).uniform(0, 1, ({size}, {size}))\n"
+        f"infer(p[:64, :64], max_iter=2, dtype=np.{dtype})\n"
+        "open('/proc/self/clear_refs', 'w').write('5')\n"
+        "base = status('VmRSS')\n"
+        "tracemalloc.start()\n"
+        f"r = infer(p, max_iter={2 * block}, tol=0.0, dtype=np.{dtype})\n"
+        "arrays = tracemalloc.get_traced_memory()[1]\n"
+        "print(status('VmHWM') - base, arrays)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    rss, arrays = (int(v) for v in out.stdout.strip().splitlines()[-1].split())
+    cells = size * size
+    return record("memory", size, dtype, None, None, peak_bytes=rss, bytes_per_cell=rss / cells,
+                  array_bytes_per_cell=arrays / cells,
+                  note="peak memory infer() adds beyond its float64 input (child process); "
+                  "the result keeps float64 beliefs and the messages")
+
+
+def compile_seconds(cold=True) -> dict:
+    """First-call time of the fast kernels (float32, float64, two threads) in a child process.
+
+    ``cold``: with an empty numba cache (JIT compilation); else with the package's own cache
+    (what every later process pays).
+    """
+    import tempfile
+
+    code = (
+        "import time, numpy as np\n"
+        "from crfmap.lbp import infer\n"
+        "p = np.random.default_rng(0).uniform(0, 1, (600, 600))\n"
+        "t = time.perf_counter()\n"
+        "infer(p[:64, :64], max_iter=3, dtype=np.float32)\n"
+        "infer(p[:64, :64], max_iter=3, dtype=np.float64)\n"
+        "infer(p, max_iter=40, dtype=np.float32, threads=2)\n"
+        "print(time.perf_counter() - t)\n"
+    )
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as cache:
+        if cold:
+            env["NUMBA_CACHE_DIR"] = cache
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    seconds = float(out.stdout.strip().splitlines()[-1])
+    return record("jit-compile", None, None, None, None, seconds=seconds, cache="empty" if cold else "warm",
+                  note="first calls of infer() in a new process: float32, float64, and the parallel pass")
+
+
+def bench_online(quick=False, progress=False):
+    """Scan-by-scan mapping of the Intel lab log at 5 cm, and its final map against an offline run."""
+    from . import paths
+    from .builder import build_grid
+    from .carmen import read_carmen
+    from .online import OnlineMapper
+
+    if not paths.have_data(INTEL):
+        return [record("online-intel", note=f"skipped: {INTEL} not found")]
+    scans = read_carmen(paths.data_file(INTEL)).scans
+    out = []
+    build_grid(scans, 0.05)
+    t_build = _median_time(lambda: build_grid(scans, 0.05), 3)
+    grid = build_grid(scans, 0.05)
+    out.append(record("builder-intel", grid.width, None, 1, None, seconds=t_build, scans=len(scans),
+                      beams=int(scans.ranges.shape[1]), shape=list(grid.shape)))
+    duration = float(scans.stamps[-1] - scans.stamps[0])
+    mapper = OnlineMapper.for_scans(scans, 0.05)
+    mapper.integrate(scans.ranges[0], scans.laser_poses[0])  # compile / load the kernels
+    mapper = OnlineMapper.for_scans(scans, 0.05)
+    t0 = time.perf_counter()
+    per_scan = mapper.run(scans, progress=progress)
+    total = time.perf_counter() - t0
+    out.append(record("online-intel", grid.width, np.float32, 1, None, scans=len(scans),
+                      ms_per_scan_median=1e3 * float(np.median(per_scan)),
+                      ms_per_scan_p90=1e3 * float(np.percentile(per_scan, 90)),
+                      seconds_total=total, log_seconds=duration, real_time_factor=duration / total,
+                      radius_m=mapper.radius, max_iter_per_scan=mapper.max_iter, table=DEFAULT_HIDDEN.tolist()))
+    # the final map against an offline converged run, with a table for which LBP converges here
+    tol = 1e-5 if quick else 1e-7
+    n = 150 if quick else len(scans)
+    part = scans if n == len(scans) else _first_scans(scans, n)
+    t0 = time.perf_counter()
+    mapper = OnlineMapper.for_scans(part, 0.05, hidden=EQUALITY_TABLE)
+    mapper.run(part)
+    final = mapper.finish(tol=tol, max_iter=20000)
+    total = time.perf_counter() - t0
+    offline = infer(build_grid(part, 0.05), EQUALITY_TABLE, tol=tol, max_iter=20000, dtype=np.float32)
+    out.append(record("online-intel-final", grid.width, np.float32, None, None, scans=n, tol=tol,
+                      table=EQUALITY_TABLE.tolist(), finish_iterations=final.iterations,
+                      offline_iterations=offline.iterations, seconds_total=total,
+                      real_time_factor=float(part.stamps[-1] - part.stamps[0]) / total,
+                      max_abs_difference=float(np.abs(final.beliefs.probability - offline.beliefs.probability).max()),
+                      observations_equal_builder=bool(np.array_equal(mapper.observations().probability,
+                                                                      build_grid(part, 0.05).probability))))
+    return out
+
+
+def _first_scans(scans, n):
+    from dataclasses import replace
+
+    return replace(scans, ranges=scans.ranges[:n], laser_poses=scans.laser_poses[:n], stamps=scans.stamps[:n])
+
+
+def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True):
+    """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI)."""
+    from tqdm.auto import tqdm
+
+    sizes = tuple(sizes or (QUICK_SIZES if quick else SIZES))
+    repeats = repeats or (2 if quick else 5)
+    work = QUICK_WORK if quick else WORK
+    converge_sizes = [s for s in (QUICK_CONVERGE_SIZES if quick else CONVERGE_SIZES) if s <= max(sizes)] or [min(sizes)]
+    tasks = [("machine", None), ("compile", None)]
+    tasks += [("throughput", s) for s in sizes]
+    tasks += [("converge", s) for s in converge_sizes]
+    if memory:
+        tasks.append(("memory", 1024 if quick else max(sizes)))
+    if online:
+        tasks.append(("online", None))
+    bar = tqdm(tasks, desc="bench", disable=not progress)
+    for kind, size in bar:
+        bar.set_postfix_str(f"{kind} {size or ''}".strip())
+        if kind == "machine":
+            yield agreement()
+            for th in threads:
+                bw = memory_bandwidth(th, 64 if quick else 256)
+                yield record("memory-bandwidth", None, None, th, None, gbytes_per_second=bw,
+                             bound_mcells_per_second={k: bw * 1e3 / v for k, v in BYTES_PER_CELL_PASS.items()},
+                             note="STREAM-style triad a = b + s c, 3 x 8 bytes per element counted "
+                             "(write-allocate traffic not counted)")
+        elif kind == "compile":
+            if not quick:
+                yield compile_seconds(cold=True)
+            yield compile_seconds(cold=False)
+        elif kind == "throughput":
+            yield bench_baseline(size, repeats)
+            for th in threads:
+                yield bench_fast(size, np.float32, th, repeats, work=work)
+            top = max(threads)
+            yield bench_fast(size, np.float64, top, repeats, work=work)
+            yield bench_fast(size, np.float32, top, repeats, hidden=GENERAL_TABLE, method="crfmap-fast-general",
+                             work=work)
+            yield bench_fast(size, np.float32, top, repeats, bounded=True, method="crfmap-fast-bounded", work=work)
+            yield bench_infer(size, np.float32, top, repeats, work=work)
+            if size <= 512:
+                yield bench_plain(size, 1, top)
+        elif kind == "converge":
+            yield from bench_converge(size, max(threads), with_plain=size <= (256 if quick else 512))
+        elif kind == "memory":
+            yield peak_memory_per_cell(size)
+        elif kind == "online":
+            yield from bench_online(quick=quick)
+
+
+def format_record(rec) -> str:
+    """One human-readable line."""
+    parts = [f"{rec['method']:<22}"]
+    for key in ("size", "dtype", "threads"):
+        if rec.get(key) is not None:
+            parts.append(f"{key}={rec[key]}")
+    if rec.get("mcells_per_second") is not None:
+        parts.append(f"{rec['mcells_per_second']:8.1f} Mcell/s")
+    if rec.get("seconds_per_iteration") is not None:
+        parts.append(f"{1e3 * rec['seconds_per_iteration']:.3f} ms/it")
+    for key, value in rec.items():
+        if key in ("method", "size", "dtype", "threads", "mcells_per_second", "seconds_per_iteration"):
+            continue
+        if isinstance(value, float):
+            value = f"{value:.4g}"
+        parts.append(f"{key}={value}")
+    return "  ".join(parts)
+
+
+def to_json(rec) -> str:
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, (np.floating, float)):
+            return None if not math.isfinite(float(v)) else float(v)
+        if isinstance(v, np.integer):
+            return int(v)
+        if isinstance(v, np.bool_):
+            return bool(v)
+        return v
+
+    return json.dumps(clean(rec))
+
+
+def _cpu_name() -> str:  # pragma: no cover - informational
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return os.uname().machine
