@@ -3,26 +3,7 @@ import math
 
 import numpy as np
 
-
-def bresenham(x0, y0, x1, y1):
-    """Cells of the line from (x0, y0) to (x1, y1), both ends included (error-term form, x steps first)."""
-    cells = []
-    dx, dy = abs(x1 - x0), abs(y1 - y0)
-    sx = 1 if x1 > x0 else -1
-    sy = 1 if y1 > y0 else -1
-    err = dx - dy
-    x, y = x0, y0
-    while True:
-        cells.append((x, y))
-        if (x, y) == (x1, y1):
-            return cells
-        e2 = 2 * err
-        if e2 > -dy:
-            err -= dy
-            x += sx
-        if e2 < dx:
-            err += dx
-            y += sy
+from naive_raycast import exact_line  # the exact rational line, independent of the Bresenham kernel
 
 
 def beams(scans, origin, resolution, free_on_no_return=0.0, max_range_is_no_return=True):
@@ -50,7 +31,7 @@ def beams(scans, origin, resolution, free_on_no_return=0.0, max_range_is_no_retu
             a = pyaw + scans.angle_min + k * scans.angle_increment
             u = (px - ox) / resolution + length * math.cos(a) / resolution
             v = (py - oy) / resolution + length * math.sin(a) / resolution
-            rays.append((bresenham(x0, y0, math.floor(u), math.floor(v)), hit))
+            rays.append((exact_line(x0, y0, math.floor(u), math.floor(v)), hit))
         out.append(rays)
     return out
 

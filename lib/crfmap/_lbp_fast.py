@@ -37,24 +37,11 @@ FASTMATH = {"nnan", "ninf", "nsz", "contract"}  # no NaN/inf ever occur (floors)
 
 
 @njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
-def _four(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3, lo, hi):
-    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S)."""
-    p = U * r2 * r3
-    q = U * r0 * r1
-    R = p * r0
-    mE = (a0 * R + a1) / (a2 * R + a3)
-    R = p * r1
-    mW = (b0 * R + b1) / (b2 * R + b3)
-    R = q * r2
-    mN = (a0 * R + a1) / (a2 * R + a3)
-    R = q * r3
-    mS = (b0 * R + b1) / (b2 * R + b3)
-    return (min(max(mE, lo), hi), min(max(mW, lo), hi), min(max(mN, lo), hi), min(max(mS, lo), hi))
-
-
-@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
 def _four_unclamped(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3):
-    """:func:`_four` for tables whose messages cannot leave [lo, hi] (all entries positive)."""
+    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S).
+
+    Used as is for tables whose messages cannot leave [lo, hi] (all entries positive).
+    """
     p = U * r2 * r3
     q = U * r0 * r1
     R = p * r0
@@ -66,6 +53,13 @@ def _four_unclamped(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3):
     R = q * r3
     mS = (b0 * R + b1) / (b2 * R + b3)
     return mE, mW, mN, mS
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _four(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3, lo, hi):
+    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S), kept in [lo, hi]."""
+    mE, mW, mN, mS = _four_unclamped(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3)
+    return (min(max(mE, lo), hi), min(max(mW, lo), hi), min(max(mN, lo), hi), min(max(mS, lo), hi))
 
 
 @njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")

@@ -157,6 +157,20 @@ def learn_thesis(
     return LearningResult(tables[:4].reshape(2, 2), tables[4:].reshape(2, 2), before, best, trace, "thesis")
 
 
+def _log_entries(hidden, link, floor):
+    """The 8 entries as logs, zero entries lifted to ``floor`` times their table's largest entry."""
+    H, L = check_table(hidden, "hidden"), check_table(link, "link")
+    H = np.maximum(H, floor * H.max())
+    L = np.maximum(L, floor * L.max())
+    return np.log(np.concatenate([H.ravel(), L.ravel()]))
+
+
+def _tables(theta):
+    """(hidden, link) from the 8 log-entries."""
+    e = np.exp(theta)
+    return e[:4].reshape(2, 2), e[4:].reshape(2, 2)
+
+
 def learn_gradient(
     observed,
     truth,
@@ -182,13 +196,10 @@ def learn_gradient(
     H0, L0 = check_table(hidden, "hidden"), check_table(link, "link")
     opts = dict(lbp_options or {})
     before = lbp_mse(obs, tru, H0, L0, opts)
-    H0 = np.maximum(H0, floor * H0.max())
-    L0 = np.maximum(L0, floor * L0.max())
-    theta = np.log(np.concatenate([H0.ravel(), L0.ravel()]))
+    theta = _log_entries(H0, L0, floor)
 
     def score(th):
-        e = np.exp(th)
-        return lbp_mse(obs, tru, e[:4].reshape(2, 2), e[4:].reshape(2, 2), opts)
+        return lbp_mse(obs, tru, *_tables(th), opts)
 
     best = score(theta)
     trace = [{"step": 0, "mse": best, "step_size": step_size, "accepted": True}]
@@ -221,8 +232,7 @@ def learn_gradient(
     if best >= before:  # lifting zero entries cost more than the search won: keep the start
         H, L = rescale(check_table(hidden, "hidden"), check_table(link, "link"))
         return LearningResult(H, L, before, before, trace, "gradient")
-    e = np.exp(theta)
-    H, L = rescale(e[:4].reshape(2, 2), e[4:].reshape(2, 2))
+    H, L = rescale(*_tables(theta))
     return LearningResult(H, L, before, best, trace, "gradient")
 
 
@@ -314,10 +324,7 @@ def learn_pseudolikelihood(
     learned tables under ``lbp_options``, for comparison with :func:`learn_thesis`.
     """
     obs, tru = _check_pair(observed, truth)
-    H0, L0 = check_table(hidden, "hidden"), check_table(link, "link")
-    H0 = np.maximum(H0, floor * H0.max())
-    L0 = np.maximum(L0, floor * L0.max())
-    theta = np.log(np.concatenate([H0.ravel(), L0.ravel()]))
+    theta = _log_entries(hidden, link, floor)
     m = np.zeros(8)
     v = np.zeros(8)
     b1, b2, eps = 0.9, 0.999, 1e-8
@@ -326,8 +333,7 @@ def learn_pseudolikelihood(
     from tqdm.auto import tqdm
 
     for t in tqdm(range(1, steps + 1), desc="learning (pseudo-likelihood)", disable=not progress, leave=False):
-        E = np.exp(theta)
-        value, grad = pseudolikelihood(obs, tru, E[:4].reshape(2, 2), E[4:].reshape(2, 2), mask)
+        value, grad = pseudolikelihood(obs, tru, *_tables(theta), mask)
         trace.append({"step": t - 1, "objective": value})
         if abs(value - last) < tol:
             break
@@ -335,8 +341,7 @@ def learn_pseudolikelihood(
         m = b1 * m + (1 - b1) * grad
         v = b2 * v + (1 - b2) * grad**2
         theta = theta + learning_rate * (m / (1 - b1**t)) / (np.sqrt(v / (1 - b2**t)) + eps)
-    E = np.exp(theta)
-    H, L = rescale(E[:4].reshape(2, 2), E[4:].reshape(2, 2))
+    H, L = rescale(*_tables(theta))
     opts = dict(lbp_options or {})
     return LearningResult(H, L, lbp_mse(obs, tru, hidden, link, opts), lbp_mse(obs, tru, H, L, opts), trace,
                           "pseudo-likelihood")
