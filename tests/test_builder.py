@@ -7,7 +7,7 @@ import pytest
 import naive_builder as naive
 from crfmap import paths
 from crfmap.carmen import read_carmen
-from crfmap.builder import (arctan_probability, build_grid, count_hits, logodds_to_probability,
+from crfmap.builder import (HitCounter, arctan_probability, build_grid, count_hits, logodds_to_probability,
                             scan_extent)
 from crfmap.cli import main
 from crfmap.errors import InputError
@@ -175,6 +175,43 @@ def test_bad_arguments(kwargs, match):
     kw.update(kwargs)
     with pytest.raises(InputError, match=match):
         build_grid(random_scans(0), **kw)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_hit_counter_one_scan_at_a_time_equals_the_whole_recording(seed):
+    """Scans added one by one, in any order, give count_hits's counts and build_grid's grid."""
+    scans = random_scans(seed, n_scans=8)
+    counter = HitCounter.for_scans(scans, 0.1, extent=EXTENT, free_on_no_return=1.5)
+    for i in np.random.default_rng(seed).permutation(len(scans)):
+        before = (counter.occupied.copy(), counter.empty.copy())
+        cells = counter.add_scan(scans.ranges[i], scans.laser_poses[i])
+        # the cells listed are the cells the scan's beams passed, once each: those whose counts
+        # moved, plus none that did not (every listed cell gained a hit)
+        moved = (counter.occupied != before[0]) | (counter.empty != before[1])
+        listed = np.zeros_like(moved)
+        listed[cells[:, 1], cells[:, 0]] = True
+        assert len(np.unique(cells, axis=0)) == len(cells)
+        np.testing.assert_array_equal(listed, moved)
+    occupied, empty = count_hits(scans, 0.1, extent=EXTENT, free_on_no_return=1.5)
+    np.testing.assert_array_equal(counter.occupied, occupied)
+    np.testing.assert_array_equal(counter.empty, empty)
+    grid = build_grid(scans, 0.1, extent=EXTENT, free_on_no_return=1.5)
+    np.testing.assert_array_equal(counter.grid().probability, grid.probability)
+    assert counter.grid().origin == grid.origin and counter.scans == len(scans)
+
+
+def test_hit_counter_for_a_sensor_and_bad_scans():
+    counter = HitCounter.for_sensor((0.0, 0.0, 4.0, 3.0), 0.1, -1.0, 0.1, 21, 0.05, 5.0)
+    assert counter.occupied.shape == (30, 40) and np.all(counter.grid().probability == 0.5)
+    assert len(counter.add_scan(np.full(21, np.nan, np.float32), (1.0, 1.0, 0.0))) == 0
+    with pytest.raises(InputError, match="ranges"):
+        counter.add_scan(np.ones(3, np.float32), (1.0, 1.0, 0.0))
+    with pytest.raises(InputError, match="laser_pose"):
+        counter.add_scan(np.ones(21, np.float32), (np.inf, 1.0, 0.0))
+    with pytest.raises(InputError, match="outside"):
+        counter.add_scan(np.ones(21, np.float32), (9.0, 1.0, 0.0))
+    with pytest.raises(InputError, match="n_beams"):
+        HitCounter.for_sensor((0.0, 0.0, 4.0, 3.0), 0.1, -1.0, 0.1, 0, 0.05, 5.0)
 
 
 def test_bad_scans():

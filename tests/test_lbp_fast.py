@@ -135,6 +135,35 @@ def test_freezing_converges_to_the_plain_fixed_point(small_tiles):
     assert np.abs(exact.beliefs.probability - plain.beliefs.probability).max() < 1e-5
 
 
+def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles):
+    """Wherever max_iter cuts the run, a last change below tol was measured on every cell,
+    never on the moving tiles only (the others frozen): else it is reported unmeasured (NaN)."""
+    obs = settling_grid()
+    h, w = obs.shape
+    tol = 1e-6
+    tables = directional_tables([[10.0, 1.0], [1.0, 10.0]])
+    cut_in_a_frozen_phase = 0
+    for max_iter in range(40, 400, 7):
+        block = F.PackedBlock(h, w, np.float64, tables, MESSAGE_FLOOR)
+        block.set_unary(obs, np.eye(2))
+        passes = []
+        run_pass = block.run_pass
+
+        def logged(n, threads, measure=True, active=None, per_tile=True):
+            out = run_pass(n, threads, measure=measure, active=active, per_tile=per_tile)
+            passes.append((active is None, out[0]))
+            return out
+
+        block.run_pass = logged
+        changes = block.run(max_iter, tol, threads=1, block=8, freeze=1e-8)
+        whole_grid, last = passes[-1]
+        if not whole_grid and last < tol:
+            cut_in_a_frozen_phase += 1
+        if changes[-1] < tol:
+            assert whole_grid and changes[-1] == last, max_iter
+    assert cut_in_a_frozen_phase > 0  # the case this test is about did occur
+
+
 def test_warm_start_from_converged_stops_at_once():
     obs = RNG.uniform(0.1, 0.9, (64, 300))
     r = infer(obs, tol=1e-8)

@@ -40,8 +40,8 @@ def test_counts_and_observations_equal_the_builder():
     mapper = OnlineMapper.for_scans(scans, 0.1)
     mapper.run(scans)
     occupied, empty = builder.count_hits(scans, 0.1)
-    np.testing.assert_array_equal(mapper.occupied, occupied)
-    np.testing.assert_array_equal(mapper.empty, empty)
+    np.testing.assert_array_equal(mapper.hits.occupied, occupied)
+    np.testing.assert_array_equal(mapper.hits.empty, empty)
     offline = builder.build_grid(scans, 0.1)
     got = mapper.observations()
     np.testing.assert_array_equal(got.probability, offline.probability)
@@ -72,7 +72,7 @@ def test_lbp_runs_only_within_the_radius():
     changed = np.any(mapper.messages() != before, axis=0)
     # a changed message was sent by a neighbour of its receiver within the radius (+ one cell)
     ys, xs = np.nonzero(changed)
-    cx, cy = mapper.geometry["origin_x"] + (xs + 0.5) * 0.1, mapper.geometry["origin_y"] + (ys + 0.5) * 0.1
+    cx, cy = mapper.origin[0] + (xs + 0.5) * 0.1, mapper.origin[1] + (ys + 0.5) * 0.1
     assert changed.any()
     assert np.hypot(cx - pose[0], cy - pose[1]).max() <= 0.5 + 0.1 + 1e-9
 
@@ -110,6 +110,56 @@ def test_bad_options_are_named():
         OnlineMapper.for_scans(scans, 0.1, radius=0.0)
     with pytest.raises(InputError, match="max_iter"):
         OnlineMapper.for_scans(scans, 0.1, max_iter=0)
+    with pytest.raises(InputError, match="margin"):
+        OnlineMapper.for_scans(scans, 0.1, margin=-1)
+    with pytest.raises(InputError, match="hits"):
+        OnlineMapper(object())
+
+
+def observed_within(mapper, margin):
+    """Cells within ``margin`` (Chebyshev) of a cell some beam passed: a slow, obvious dilation."""
+    seen = (mapper.hits.occupied + mapper.hits.empty) > 0
+    out = np.zeros_like(seen)
+    for y, x in zip(*np.nonzero(seen)):
+        out[max(y - margin, 0):y + margin + 1, max(x - margin, 0):x + margin + 1] = True
+    return out
+
+
+def sent_by(changed):
+    """Cells that sent a changed message: slot d of (y, x) comes from its neighbour in direction d."""
+    senders = np.zeros(changed.shape[1:], bool)
+    senders[:, 1:] |= changed[1, :, :-1]  # slot 1 (from the east) of x came from x + 1
+    senders[:, :-1] |= changed[0, :, 1:]  # slot 0 (from the west) of x came from x - 1
+    senders[1:, :] |= changed[3, :-1, :]  # slot 3 (from the north) of row y came from row y + 1
+    senders[:-1, :] |= changed[2, 1:, :]  # slot 2 (from the south) of row y came from row y - 1
+    return senders
+
+
+def test_margin_keeps_messages_from_unobserved_cells_still():
+    scans = room_scans(n=3)
+    mapper = OnlineMapper.for_scans(scans, 0.1, margin=2, radius=10.0, max_iter=50)
+    start = mapper.messages()
+    mapper.run(scans)
+    changed = mapper.messages() != start
+    near = observed_within(mapper, 2)
+    assert changed.any() and not near.all()
+    # a message moved only if a cell near an observation could have sent it
+    assert not np.any(sent_by(changed) & ~near)
+    far = ~observed_within(mapper, 3)
+    np.testing.assert_array_equal(mapper.beliefs().probability[far], 0.5)
+
+
+def test_margin_final_map_equals_offline_bounded_lbp():
+    """With a margin, finish() reaches infer(region=the same near-observed cells): tolerance 1e-6."""
+    scans = room_scans(n=4)
+    mapper = OnlineMapper.for_scans(scans, 0.1, hidden=WEAK, dtype=np.float64, radius=1.0, max_iter=4, margin=1)
+    mapper.run(scans)
+    final = mapper.finish(tol=1e-10, max_iter=5000)
+    np.testing.assert_array_equal(mapper.region(), observed_within(mapper, 1))
+    offline = infer(builder.build_grid(scans, 0.1), WEAK, tol=1e-10, max_iter=5000, dtype=np.float64,
+                    region=mapper.region())
+    assert final.converged and offline.converged
+    np.testing.assert_allclose(final.beliefs.probability, offline.beliefs.probability, atol=1e-6)
 
 
 @pytest.mark.skipif(not paths.have_data("carmen/intel-corrected.log.gz"), reason="Intel lab log not present")

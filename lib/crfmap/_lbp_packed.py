@@ -223,10 +223,26 @@ class PackedBlock:
         _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
         self._extents_changed()
 
-    def set_rows(self, y0, x_from, x_to):
-        """Only cells x_from[i] <= x < x_to[i] of row y0 + i send (e.g. a disc): no mask needed."""
-        self.act = np.zeros((2, 1, 1), np.uint8)
-        self.use_act = False
+    def set_packed_mask(self, act):
+        """Only cells whose entry of ``act`` (red/black planes, shape of ``un``) is non-zero send.
+
+        ``act`` is used as is, not copied: its owner may keep updating it between passes.
+        """
+        self.act = act
+        self.use_act = True
+        self.lo_k = np.zeros((2, self.h), np.int64)
+        self.hi_k = np.zeros((2, self.h), np.int64)
+        _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
+        self._extents_changed()
+
+    def set_rows(self, y0, x_from, x_to, act=None):
+        """Only cells x_from[i] <= x < x_to[i] of row y0 + i send (e.g. a disc).
+
+        With ``act`` (red/black planes as in :meth:`set_packed_mask`), only those among them
+        whose entry is non-zero; ``active_cells`` then counts the whole rows' ranges.
+        """
+        self.act = np.zeros((2, 1, 1), np.uint8) if act is None else act
+        self.use_act = act is not None
         self.lo_k = np.zeros((2, self.h), np.int64)
         self.hi_k = np.zeros((2, self.h), np.int64)
         rows = y0 + np.arange(len(x_from))
@@ -341,7 +357,8 @@ class PackedBlock:
         iteration of every cell decides. ``freeze=0`` freezes only tiles that did not move at
         all, which changes nothing.
 
-        Returns the list of per-iteration largest changes (NaN where not measured).
+        Returns the list of per-iteration largest changes (NaN where not measured, and for the
+        last one if max_iter ends the run before a whole-grid iteration confirmed a settled one).
         """
         changes = []
         size = max(1, int(first))
@@ -352,6 +369,7 @@ class PackedBlock:
             n = min(size, block, max_iter - len(changes))
             change, per_tile = self.run_pass(n, threads, measure=True, active=active, per_tile=sparse)
             changes.extend([float("nan")] * (n - 1) + [change])
+            whole_grid = active is None
             size *= 2
             if change < tol:
                 if active is None:
@@ -361,6 +379,9 @@ class PackedBlock:
             if sparse:
                 moving = per_tile > freeze
                 active = _dilate(moving) if moving.mean() < SPARSE_FRACTION else None
+        if changes and not whole_grid and changes[-1] < tol:
+            # max_iter ran out before an iteration of every cell confirmed the settled tiles
+            changes[-1] = float("nan")
         return changes
 
 

@@ -21,8 +21,9 @@ Methods:
 - ``converge``: noisy office floors (flip noise 0.2), table [[10, 1], [1, 10]], until the
   largest message change is below 1e-4: fast kernel with frozen tiles (default), exact
   (``freeze=0``), and the plain kernel on small grids, with the largest belief difference.
-- ``online-intel`` / ``online-intel-final`` / ``builder-intel``: the Intel lab log at 5 cm
-  (when the data is present): scan-by-scan mapping, the final map against an offline run.
+- ``online-intel`` / ``online-intel-margin`` / ``online-intel-final`` / ``builder-intel``: the
+  Intel lab log at 5 cm (when the data is present): scan-by-scan mapping (LBP on a 4 m disc; with
+  ``-margin`` only its cells near observations), the final map against an offline run.
 - ``memory``: peak resident memory of :func:`crfmap.lbp.infer` per cell, in a child process.
 - ``jit-compile``: the first calls of :func:`crfmap.lbp.infer` in a new process, with an empty
   numba cache (compilation; not in quick runs) and with the package's cache.
@@ -52,6 +53,7 @@ BYTES_PER_CELL_PASS = {"float32": 36, "float64": 72}  # read 4 messages + observ
 GENERAL_TABLE = np.array([[3.0, 0.7], [1.3, 2.5]])  # non-symmetric (receiver pairing)
 EQUALITY_TABLE = np.array([[2.0, 1.0], [1.0, 2.0]])  # LBP converges on the Intel grid with it
 INTEL = "carmen/intel-corrected.log.gz"
+ONLINE_MARGIN = 3  # [cells] the online run near observations only (OnlineMapper margin)
 
 
 # --- the baseline -----------------------------------------------------------------------------
@@ -394,17 +396,19 @@ def bench_online(quick=False, progress=False):
     out.append(record("builder-intel", grid.width, None, 1, None, seconds=t_build, scans=len(scans),
                       beams=int(scans.ranges.shape[1]), shape=list(grid.shape)))
     duration = float(scans.stamps[-1] - scans.stamps[0])
-    mapper = OnlineMapper.for_scans(scans, 0.05)
-    mapper.integrate(scans.ranges[0], scans.laser_poses[0])  # compile / load the kernels
-    mapper = OnlineMapper.for_scans(scans, 0.05)
-    t0 = time.perf_counter()
-    per_scan = mapper.run(scans, progress=progress)
-    total = time.perf_counter() - t0
-    out.append(record("online-intel", grid.width, np.float32, 1, None, scans=len(scans),
-                      ms_per_scan_median=1e3 * float(np.median(per_scan)),
-                      ms_per_scan_p90=1e3 * float(np.percentile(per_scan, 90)),
-                      seconds_total=total, log_seconds=duration, real_time_factor=duration / total,
-                      radius_m=mapper.radius, max_iter_per_scan=mapper.max_iter, table=DEFAULT_HIDDEN.tolist()))
+    for method, margin in (("online-intel", None), ("online-intel-margin", ONLINE_MARGIN)):
+        mapper = OnlineMapper.for_scans(scans, 0.05, margin=margin)
+        mapper.integrate(scans.ranges[0], scans.laser_poses[0])  # compile / load the kernels
+        mapper = OnlineMapper.for_scans(scans, 0.05, margin=margin)
+        t0 = time.perf_counter()
+        per_scan = mapper.run(scans, progress=progress)
+        total = time.perf_counter() - t0
+        out.append(record(method, grid.width, np.float32, 1, None, scans=len(scans),
+                          ms_per_scan_median=1e3 * float(np.median(per_scan)),
+                          ms_per_scan_p90=1e3 * float(np.percentile(per_scan, 90)),
+                          seconds_total=total, log_seconds=duration, real_time_factor=duration / total,
+                          radius_m=mapper.radius, max_iter_per_scan=mapper.max_iter, margin_cells=margin,
+                          table=DEFAULT_HIDDEN.tolist()))
     # the final map against an offline converged run, with a table for which LBP converges here
     tol = 1e-5 if quick else 1e-7
     n = 150 if quick else len(scans)

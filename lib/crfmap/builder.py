@@ -22,132 +22,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
-
+from ._beam_kernels import _count_hits, _logodds_update
 from .errors import InputError
 from .grid import UNKNOWN, OccupancyGrid
-from .raycast import _bresenham
 
 EXTENT_PADDING = 0.5  # [m] margin around poses and end points when the extent comes from the data
 MAX_CELLS = 100_000_000  # a bigger grid is almost surely a unit mistake (and would not fit in memory)
 PROGRESS_CHUNK = 64  # scans per kernel call when a progress bar is shown
-
-# Beam kinds the kernels understand.
-_SKIP, _HIT, _FREE = 0, 1, 2
-
-
-@njit(cache=True, nogil=True)
-def _classify(r, range_min, range_max, max_is_no_return, free_range):
-    """(kind, length [m]) of one reading under REP 117."""
-    if math.isnan(r) or r == -math.inf:
-        return _SKIP, 0.0
-    if r == math.inf or (max_is_no_return and r == range_max):
-        if free_range > 0.0:
-            return _FREE, free_range
-        return _SKIP, 0.0
-    if r < range_min or r > range_max:
-        return _SKIP, 0.0
-    return _HIT, r
-
-
-@njit(cache=True, nogil=True)
-def _end_cell(u0, v0, u1, v1, width, height):
-    """End cell of the ray (u0, v0) -> (u1, v1) in cell units, clipped to the grid; (x, y, clipped)."""
-    t = 1.0
-    du, dv = u1 - u0, v1 - v0
-    edge = 1e-9  # stay inside the last cell when clipping to the far edge
-    if u1 < 0.0:
-        t = min(t, (0.0 - u0) / du)
-    elif u1 >= width:
-        t = min(t, (width - edge - u0) / du)
-    if v1 < 0.0:
-        t = min(t, (0.0 - v0) / dv)
-    elif v1 >= height:
-        t = min(t, (height - edge - v0) / dv)
-    clipped = t < 1.0
-    x = min(max(int(math.floor(u0 + t * du)), 0), width - 1)
-    y = min(max(int(math.floor(v0 + t * dv)), 0), height - 1)
-    return x, y, clipped
-
-
-@njit(cache=True, nogil=True)
-def _count_hits(ranges, angles, poses, range_min, range_max, max_is_no_return, free_range,
-                origin_x, origin_y, resolution, occupied, empty, buf):
-    """Add every beam's hits to ``occupied[y, x]`` / ``empty[y, x]`` (in place); return beams used."""
-    height, width = occupied.shape
-    used = 0
-    for i in range(ranges.shape[0]):
-        px, py, pyaw = poses[i, 0], poses[i, 1], poses[i, 2]
-        u0 = (px - origin_x) / resolution
-        v0 = (py - origin_y) / resolution
-        x0 = int(math.floor(u0))
-        y0 = int(math.floor(v0))
-        for k in range(ranges.shape[1]):
-            kind, length = _classify(ranges[i, k], range_min, range_max, max_is_no_return, free_range)
-            if kind == _SKIP:
-                continue
-            used += 1
-            a = pyaw + angles[k]
-            u1 = u0 + length * math.cos(a) / resolution
-            v1 = v0 + length * math.sin(a) / resolution
-            x1, y1, clipped = _end_cell(u0, v0, u1, v1, width, height)
-            n = _bresenham(x0, y0, x1, y1, buf)
-            for j in range(n - 1):
-                empty[buf[j, 1], buf[j, 0]] += 1
-            if kind == _HIT and not clipped:
-                occupied[y1, x1] += 1
-            else:
-                empty[y1, x1] += 1
-    return used
-
-
-@njit(cache=True, nogil=True)
-def _logodds_update(ranges, angles, poses, range_min, range_max, max_is_no_return, free_range,
-                    origin_x, origin_y, resolution, l_hit, l_miss, limit, logodds,
-                    hit_stamp, miss_stamp, scan_offset, buf):
-    """Per-scan log-odds update of ``logodds[y, x]`` (in place); each cell changes once per scan."""
-    height, width = logodds.shape
-    n_beams = ranges.shape[1]
-    end_x = np.empty(n_beams, np.int64)
-    end_y = np.empty(n_beams, np.int64)
-    kinds = np.zeros(n_beams, np.int64)
-    used = 0
-    for i in range(ranges.shape[0]):
-        scan_id = scan_offset + i
-        px, py, pyaw = poses[i, 0], poses[i, 1], poses[i, 2]
-        u0 = (px - origin_x) / resolution
-        v0 = (py - origin_y) / resolution
-        x0 = int(math.floor(u0))
-        y0 = int(math.floor(v0))
-        # Pass 1: end cells; cells where a beam ended are occupied for this scan.
-        for k in range(n_beams):
-            kind, length = _classify(ranges[i, k], range_min, range_max, max_is_no_return, free_range)
-            kinds[k] = kind
-            if kind == _SKIP:
-                continue
-            used += 1
-            a = pyaw + angles[k]
-            x1, y1, clipped = _end_cell(u0, v0, u0 + length * math.cos(a) / resolution,
-                                        v0 + length * math.sin(a) / resolution, width, height)
-            end_x[k], end_y[k] = x1, y1
-            if kind == _HIT and clipped:
-                kinds[k] = _FREE
-            if kinds[k] == _HIT and hit_stamp[y1, x1] != scan_id:
-                hit_stamp[y1, x1] = scan_id
-                logodds[y1, x1] = min(max(logodds[y1, x1] + l_hit, -limit), limit)
-        # Pass 2: every other cell the beams pass (or end in, for no-returns) is a miss, once.
-        for k in range(n_beams):
-            if kinds[k] == _SKIP:
-                continue
-            n = _bresenham(x0, y0, end_x[k], end_y[k], buf)
-            last = n - 1 if kinds[k] == _HIT else n
-            for j in range(last):
-                x, y = buf[j, 0], buf[j, 1]
-                if hit_stamp[y, x] != scan_id and miss_stamp[y, x] != scan_id:
-                    miss_stamp[y, x] = scan_id
-                    logodds[y, x] = min(max(logodds[y, x] + l_miss, -limit), limit)
-    return used
-
+_NO_STAMP = np.zeros((0, 0), np.int32)  # the hit kernel lists no touched cells
+_NO_CELLS = np.zeros((0, 2), np.int64)
 
 # --- checked public functions -------------------------------------------------------------
 
@@ -288,9 +171,10 @@ def _hits(g, progress):
     buf = _ray_buffer(g)
     used = 0
     for a, b in _chunks(len(g["ranges"]), progress, "ray casting"):
-        used += _count_hits(g["ranges"][a:b], g["angles"], g["poses"][a:b], g["range_min"], g["range_max"],
-                            g["max_is_no_return"], g["free_range"], g["origin_x"], g["origin_y"],
-                            g["resolution"], occupied, empty, buf)
+        n, _ = _count_hits(g["ranges"][a:b], g["angles"], g["poses"][a:b], g["range_min"], g["range_max"],
+                           g["max_is_no_return"], g["free_range"], g["origin_x"], g["origin_y"],
+                           g["resolution"], occupied, empty, buf, _NO_STAMP, 0, _NO_CELLS)
+        used += n
     return occupied, empty, used
 
 
@@ -311,6 +195,97 @@ def count_hits(scans, resolution, extent=None, free_on_no_return=False, max_rang
     g = _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
     occupied, empty, _ = _hits(g, progress)
     return occupied, empty
+
+
+class HitCounter:
+    """The hit counts of :func:`count_hits`, filled one scan at a time (online mapping).
+
+    After :meth:`add_scan` of every scan of a recording, in any order, ``occupied`` and
+    ``empty`` equal :func:`count_hits` of it (same grid, same beams, same cells) and
+    :meth:`grid` equals :func:`build_grid` with the arctan model.
+
+    >>> from crfmap.recording import ScanSet
+    >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
+    >>> counter = HitCounter.for_scans(s, 0.1, extent=(0, 0, 0.5, 0.1))
+    >>> counter.add_scan(s.ranges[0], s.laser_poses[0]).tolist()  # the cells it touched, (x, y)
+    [[0, 0], [1, 0], [2, 0], [3, 0], [4, 0]]
+    >>> counter.occupied.tolist(), counter.empty.tolist()
+    ([[0, 0, 0, 0, 1]], [[1, 1, 1, 1, 0]])
+    """
+
+    def __init__(self, geometry):
+        g = dict(geometry)
+        self.width, self.height = int(g["width"]), int(g["height"])
+        self.resolution = float(g["resolution"])
+        self.origin = (float(g["origin_x"]), float(g["origin_y"]), 0.0)
+        self.frame_id = g.get("frame_id", "map")
+        self.angles = np.asarray(g["angles"], np.float64)
+        self._sensor = (g["range_min"], g["range_max"], g["max_is_no_return"], g["free_range"])
+        self.occupied = np.zeros((self.height, self.width), np.int32)
+        self.empty = np.zeros_like(self.occupied)
+        self.scans = 0
+        self._buf = np.empty((self.width + self.height + 2, 2), np.int64)
+        self._stamp = np.full((self.height, self.width), -1, np.int32)
+        # a scan touches at most every cell, or every beam's whole line (pages are used lazily)
+        self._touched = np.empty((min(self.width * self.height, len(self.angles) * len(self._buf)), 2), np.int64)
+
+    @classmethod
+    def for_scans(cls, scans, resolution, extent=None, free_on_no_return=False,
+                  max_range_is_no_return=True) -> "HitCounter":
+        """A counter for a recording's sensor, on the grid :func:`build_grid` would make of it."""
+        g = _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
+        g["frame_id"] = getattr(scans, "frame_id", "map") or "map"
+        return cls(g)
+
+    @classmethod
+    def for_sensor(cls, extent, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
+                   free_on_no_return=False, max_range_is_no_return=True, frame_id="map") -> "HitCounter":
+        """A counter for a grid over ``extent`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
+        from .recording import ScanSet
+
+        try:
+            xmin, ymin, xmax, ymax = (float(v) for v in extent)
+        except (TypeError, ValueError):
+            raise InputError("extent", f"expected (xmin, ymin, xmax, ymax) in metres, got {extent!r}") from None
+        if not (isinstance(n_beams, (int, np.integer)) and n_beams >= 1):
+            raise InputError("n_beams", f"must be a positive integer, got {n_beams!r}")
+        centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
+        probe = ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
+                        range_max, centre, np.zeros(1), frame_id=frame_id, source="sensor")
+        return cls.for_scans(probe, resolution, extent, free_on_no_return, max_range_is_no_return)
+
+    def add_scan(self, ranges, laser_pose) -> np.ndarray:
+        """Count one scan's hits (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map).
+
+        Returns the cells whose counts changed, once each, as an (n, 2) array of (x, y).
+        """
+        r = np.asarray(ranges)
+        if r.shape != (len(self.angles),) or not np.issubdtype(r.dtype, np.floating):
+            raise InputError("ranges", f"expected {len(self.angles)} floating-point readings, got shape {r.shape} "
+                             f"dtype {r.dtype}")
+        pose = np.asarray(laser_pose, dtype=np.float64).ravel()
+        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+            raise InputError("laser_pose", f"expected finite (x, y, yaw), got {laser_pose!r}")
+        u = (pose[0] - self.origin[0]) / self.resolution
+        v = (pose[1] - self.origin[1]) / self.resolution
+        if not (0 <= u < self.width and 0 <= v < self.height):
+            raise InputError("laser_pose", f"({pose[0]:.3f}, {pose[1]:.3f}) m lies outside the grid")
+        if self.scans >= np.iinfo(np.int32).max:  # pragma: no cover - 2 billion scans
+            self._stamp.fill(-1)
+            self.scans = 0
+        range_min, range_max, max_is_no_return, free_range = self._sensor
+        _, n = _count_hits(r.astype(np.float32, copy=False)[None, :], self.angles, pose[None, :], range_min,
+                           range_max, max_is_no_return, free_range, self.origin[0], self.origin[1], self.resolution,
+                           self.occupied, self.empty, self._buf, self._stamp, self.scans, self._touched)
+        self.scans += 1
+        return self._touched[:n].copy()
+
+    def grid(self) -> OccupancyGrid:
+        """The arctan grid of the scans so far (:func:`build_grid` with ``model="arctan"``)."""
+        p = arctan_probability(self.occupied, self.empty)
+        p[(self.occupied == 0) & (self.empty == 0)] = UNKNOWN
+        return OccupancyGrid(p, resolution=self.resolution, origin=self.origin, frame_id=self.frame_id,
+                             meta={"model": "arctan", "scans": self.scans})
 
 
 def arctan_probability(occupied_hits, empty_hits):

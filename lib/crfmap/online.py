@@ -31,9 +31,8 @@ from . import builder
 from ._lbp_packed import PackedBlock, fast_tables_ok, unary_odds
 from .errors import InputError
 from .grid import UNKNOWN, OccupancyGrid
-from .lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, LBPResult, run_packed
+from .lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, LBPResult, near_known, run_packed
 from .potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table, directional_tables
-from .raycast import _bresenham
 from .recording import ScanSet
 
 DEFAULT_RADIUS = 4.0  # [m] bounded LBP runs on the cells within this distance of the laser
@@ -41,32 +40,25 @@ DEFAULT_MAX_ITER = 16  # LBP iterations per scan at most
 
 
 @njit(cache=True, nogil=True)
-def _refresh_observations(ranges, angles, pose, range_min, range_max, max_is_no_return, free_range,
-                          origin_x, origin_y, resolution, occupied, empty, link, floor, un, buf):
-    """Re-derive the observation odds of every cell one scan's beams passed, from the hit counts.
+def _refresh_observations(cells, occupied, empty, link, floor, un, known, near, margin):
+    """Re-derive the observation odds of the cells a scan touched, from their hit counts.
 
-    Walks the same cells as :func:`crfmap.builder._count_hits` (same beam classification, end
-    cell and Bresenham line) and sets each one's P = 0.5 + atan(occupied - empty) / pi (thesis
-    eq. 16) into the red/black observation planes ``un``.
+    Sets each cell's P = 0.5 + atan(occupied - empty) / pi (thesis eq. 16) into the red/black
+    observation planes ``un``. With ``margin`` >= 0, a cell observed for the first time marks
+    every cell within ``margin`` (Chebyshev distance) in the red/black planes ``near``, as
+    :func:`crfmap.lbp.near_known` does for a whole grid.
     """
     height, width = occupied.shape
-    u0 = (pose[0] - origin_x) / resolution
-    v0 = (pose[1] - origin_y) / resolution
-    x0 = int(math.floor(u0))
-    y0 = int(math.floor(v0))
-    for k in range(ranges.shape[0]):
-        kind, length = builder._classify(ranges[k], range_min, range_max, max_is_no_return, free_range)
-        if kind == builder._SKIP:
-            continue
-        a = pose[2] + angles[k]
-        x1, y1, _ = builder._end_cell(u0, v0, u0 + length * math.cos(a) / resolution,
-                                      v0 + length * math.sin(a) / resolution, width, height)
-        n = _bresenham(x0, y0, x1, y1, buf)
-        for j in range(n):
-            x = buf[j, 0]
-            y = buf[j, 1]
-            p = 0.5 + math.atan(occupied[y, x] - empty[y, x]) / math.pi
-            un[(x + y) & 1, y + 1, (x >> 1) + 1] = unary_odds(p, link, floor)
+    for i in range(cells.shape[0]):
+        x = cells[i, 0]
+        y = cells[i, 1]
+        p = 0.5 + math.atan(occupied[y, x] - empty[y, x]) / math.pi
+        un[(x + y) & 1, y + 1, (x >> 1) + 1] = unary_odds(p, link, floor)
+        if margin >= 0 and known[y, x] == 0:
+            known[y, x] = 1
+            for ny in range(max(y - margin, 0), min(y + margin + 1, height)):
+                for nx in range(max(x - margin, 0), min(x + margin + 1, width)):
+                    near[(nx + ny) & 1, ny + 1, (nx >> 1) + 1] = 1
 
 
 @dataclass
@@ -84,9 +76,9 @@ class OnlineMapper:
 
     Parameters
     ----------
-    geometry : dict
-        The grid and sensor geometry as :func:`crfmap.builder` computes it; build a mapper
-        with :meth:`for_scans` (or :meth:`for_sensor`) rather than by hand.
+    hits : crfmap.builder.HitCounter
+        The grid and the laser's geometry, and the hit counts (fresh, or holding earlier scans);
+        :meth:`for_scans` and :meth:`for_sensor` make one.
     hidden, link : 2x2 tables (see :mod:`crfmap.potentials`)
     radius : float
         [m] LBP runs on the cells whose centres lie within this distance of the laser.
@@ -96,12 +88,18 @@ class OnlineMapper:
         Largest message change that counts as settled.
     dtype : np.float32 or np.float64
     pairing : "receiver" or "oriented"
+    margin : None or int
+        [cells] With a margin, only cells within ``margin`` cells (Chebyshev distance) of a cell
+        some beam has observed send messages, as with ``region=near_known(grid, margin)`` in
+        :func:`crfmap.lbp.infer`: gaps and occlusions up to ``margin`` cells deep are filled
+        and the unexplored rest stays unknown. None: every cell in the disc sends (the thesis's
+        model; with a strong coupling it fills unexplored space with its border's state).
     """
 
-    def __init__(self, geometry, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, *, radius=DEFAULT_RADIUS,
-                 max_iter=DEFAULT_MAX_ITER, tol=1e-4, dtype=np.float32, pairing="receiver"):
-        self.geometry = dict(geometry)
-        g = self.geometry
+    def __init__(self, hits: builder.HitCounter, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, *, radius=DEFAULT_RADIUS,
+                 max_iter=DEFAULT_MAX_ITER, tol=1e-4, dtype=np.float32, pairing="receiver", margin=None):
+        if not isinstance(hits, builder.HitCounter):
+            raise InputError("hits", f"expected a crfmap.builder.HitCounter, got {type(hits).__name__}")
         self.hidden = check_table(hidden, "hidden")
         self.link = check_table(link, "link")
         self.pairing = check_pairing(pairing)
@@ -114,21 +112,22 @@ class OnlineMapper:
             raise InputError("max_iter", f"must be a positive integer, got {max_iter!r}")
         if not (np.isfinite(tol) and tol >= 0):
             raise InputError("tol", f"must be a non-negative number, got {tol!r}")
+        if margin is not None and not (isinstance(margin, (int, np.integer)) and margin >= 0):
+            raise InputError("margin", f"must be None or a non-negative whole number of cells, got {margin!r}")
+        self.hits = hits
         self.radius = float(radius)
         self.max_iter = int(max_iter)
         self.tol = float(tol)
-        self.height, self.width = int(g["height"]), int(g["width"])
-        self.resolution = float(g["resolution"])
-        self.origin = (float(g["origin_x"]), float(g["origin_y"]), 0.0)
-        self.frame_id = g.get("frame_id", "map")
-        self.n_beams = len(g["angles"])
-        self.occupied = np.zeros((self.height, self.width), np.int32)
-        self.empty = np.zeros_like(self.occupied)
-        self._buf = np.empty((self.width + self.height + 2, 2), np.int64)
+        self.margin = None if margin is None else int(margin)
+        self.height, self.width = hits.height, hits.width
+        self.resolution, self.origin, self.frame_id = hits.resolution, hits.origin, hits.frame_id
+        self.n_beams = len(hits.angles)
         self._link = np.ascontiguousarray(self.link.ravel())
         self.packed = PackedBlock(self.height, self.width, dtype, tables, MESSAGE_FLOOR)
         self.packed.set_unary(np.full((self.height, self.width), UNKNOWN), self.link)
-        self.scans = 0
+        # with a margin: cells ever observed, and the cells near them (the only senders), packed
+        self._known = np.zeros((self.height, self.width) if margin is not None else (0, 0), np.uint8)
+        self._near = np.zeros(self.packed.un.shape if margin is not None else (2, 1, 1), np.uint8)
 
     # --- construction -----------------------------------------------------------------------------
     @classmethod
@@ -139,51 +138,32 @@ class OnlineMapper:
         ``extent`` None takes the data's extent as the builder does, so the final
         :meth:`observations` equal ``build_grid(scans, resolution)`` cell for cell.
         """
-        g = builder._geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
-        g["frame_id"] = getattr(scans, "frame_id", "map") or "map"
-        for key in ("ranges", "poses", "source"):
-            g.pop(key)
-        return cls(g, **options)
+        hits = builder.HitCounter.for_scans(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
+        return cls(hits, **options)
 
     @classmethod
     def for_sensor(cls, extent, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
                    free_on_no_return=False, max_range_is_no_return=True, **options) -> "OnlineMapper":
         """A mapper for a grid over ``extent`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
-        try:
-            xmin, ymin, xmax, ymax = (float(v) for v in extent)
-        except (TypeError, ValueError):
-            raise InputError("extent", f"expected (xmin, ymin, xmax, ymax) in metres, got {extent!r}") from None
-        centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
-        probe = ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
-                        range_max, centre, np.zeros(1), source="sensor")
-        return cls.for_scans(probe, resolution, extent, free_on_no_return, max_range_is_no_return, **options)
+        hits = builder.HitCounter.for_sensor(extent, resolution, angle_min, angle_increment, n_beams, range_min,
+                                             range_max, free_on_no_return, max_range_is_no_return)
+        return cls(hits, **options)
 
     # --- mapping ----------------------------------------------------------------------------------
+    @property
+    def scans(self) -> int:
+        """Scans integrated so far."""
+        return self.hits.scans
+
     def integrate(self, ranges, laser_pose, threads=1) -> ScanUpdate:
         """Add one scan (``ranges`` [m], REP 117) taken at ``laser_pose`` (x, y, yaw) in the map frame."""
         t0 = time.perf_counter()
-        g = self.geometry
-        r = np.asarray(ranges)
-        if r.shape != (self.n_beams,) or not np.issubdtype(r.dtype, np.floating):
-            raise InputError("ranges", f"expected {self.n_beams} floating-point readings, got shape {r.shape} "
-                             f"dtype {r.dtype}")
-        pose = np.asarray(laser_pose, dtype=np.float64).ravel()
-        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-            raise InputError("laser_pose", f"expected finite (x, y, yaw), got {laser_pose!r}")
-        u0 = (pose[0] - self.origin[0]) / self.resolution
-        v0 = (pose[1] - self.origin[1]) / self.resolution
-        if not (0 <= u0 < self.width and 0 <= v0 < self.height):
-            raise InputError("laser_pose", f"({pose[0]:.3f}, {pose[1]:.3f}) m lies outside the grid")
-        r = r.astype(np.float32, copy=False)
-        builder._count_hits(r[None, :], g["angles"], pose[None, :], g["range_min"], g["range_max"],
-                            g["max_is_no_return"], g["free_range"], g["origin_x"], g["origin_y"], g["resolution"],
-                            self.occupied, self.empty, self._buf)
-        _refresh_observations(r, g["angles"], pose, g["range_min"], g["range_max"], g["max_is_no_return"],
-                              g["free_range"], g["origin_x"], g["origin_y"], g["resolution"], self.occupied,
-                              self.empty, self._link, MESSAGE_FLOOR, self.packed.un, self._buf)
-        self._set_disc(u0, v0)
+        cells = self.hits.add_scan(ranges, laser_pose)  # checks its input
+        _refresh_observations(cells, self.hits.occupied, self.hits.empty, self._link, MESSAGE_FLOOR, self.packed.un,
+                              self._known, self._near, -1 if self.margin is None else self.margin)
+        self._set_disc((laser_pose[0] - self.origin[0]) / self.resolution,
+                       (laser_pose[1] - self.origin[1]) / self.resolution)
         changes = run_packed(self.packed, self.max_iter, self.tol, threads, block=DEFAULT_BLOCK)
-        self.scans += 1
         last = changes[-1] if changes else 0.0
         return ScanUpdate(time.perf_counter() - t0, len(changes), bool(last < self.tol), self.packed.active_cells)
 
@@ -198,7 +178,7 @@ class OnlineMapper:
         x_from = np.clip(np.ceil(u0 - half - 0.5), 0, self.width).astype(np.int64)
         x_to = np.clip(np.floor(u0 + half - 0.5) + 1, 0, self.width).astype(np.int64)
         x_to = np.where(inside, np.maximum(x_to, x_from), x_from)
-        self.packed.set_rows(y_lo, x_from, x_to)
+        self.packed.set_rows(y_lo, x_from, x_to, act=None if self.margin is None else self._near)
 
     def run(self, scans: ScanSet, progress=False, threads=1) -> np.ndarray:
         """Integrate every scan of ``scans`` in order; returns the seconds each update took."""
@@ -222,7 +202,10 @@ class OnlineMapper:
         tol = self.tol if tol is None else float(tol)
         threads = numba.get_num_threads() if threads is None else int(threads)
         t0 = time.perf_counter()
-        self.packed.set_mask(None)
+        if self.margin is None:
+            self.packed.set_mask(None)
+        else:
+            self.packed.set_packed_mask(self._near)
         changes = np.asarray(run_packed(self.packed, max_iter, tol, threads, block=DEFAULT_BLOCK), float)
         beliefs = self.beliefs()
         return LBPResult(beliefs=beliefs, iterations=len(changes), max_change=changes,
@@ -236,9 +219,18 @@ class OnlineMapper:
 
     def observations(self) -> OccupancyGrid:
         """The arctan grid of every scan so far (what :func:`crfmap.builder.build_grid` gives)."""
-        p = builder.arctan_probability(self.occupied, self.empty)
-        p[(self.occupied == 0) & (self.empty == 0)] = UNKNOWN
-        return self._grid(p, model="arctan")
+        return self.hits.grid()
+
+    def region(self) -> np.ndarray:
+        """Boolean [y, x] mask of the cells allowed to send: near an observed cell (all without a margin).
+
+        ``infer(observations, region=mapper.region())`` is the offline run :meth:`finish` matches.
+        """
+        if self.margin is None:
+            return np.ones((self.height, self.width), bool)
+        observed = (self.hits.occupied > 0) | (self.hits.empty > 0)
+        # near_known dilates the cells that are not 0.5; mark every observed one so
+        return near_known(np.where(observed, 1.0, UNKNOWN), self.margin)
 
     def beliefs(self) -> OccupancyGrid:
         """The current LBP beliefs P(occupied) of every cell."""
