@@ -3,7 +3,7 @@
 Message types by name (``T_*``), the typestores crfmap writes with, a factory building
 each message of a :class:`~crfmap.recording.Recording` (ROS1 headers carry a ``seq``,
 ROS2 ones do not), and the conversions back: poses, stamps and grids out of messages.
-Private to the package: :mod:`crfmap.bagio` is the interface.
+Private to the package: :mod:`crfmap.bagio` and :mod:`crfmap.bagwrite` are the interface.
 """
 from __future__ import annotations
 
@@ -20,6 +20,11 @@ T_TF = "tf2_msgs/msg/TFMessage"
 T_POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 T_GRID = "nav_msgs/msg/OccupancyGrid"
 TF_TYPES = ("tf2_msgs/msg/TFMessage", "tf/msg/tfMessage")  # ROS2 / ROS1 names of /tf messages
+
+# The topics crfmap writes, and reads by default
+SCAN_TOPIC, ODOM_TOPIC, CMD_VEL_TOPIC = "/scan", "/odom", "/cmd_vel"
+TF_TOPIC, TF_STATIC_TOPIC = "/tf", "/tf_static"
+TRUTH_TOPIC, MAP_TOPIC = "/ground_truth_pose", "/map"
 
 
 # --- values out of messages ---------------------------------------------------------------
