@@ -42,7 +42,8 @@ from numba import njit, prange
 
 from . import _lbp_packed as F
 from .lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, infer
-from .potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables, link_unary
+from .bench_baseline import NumpyCheckerboard
+from .potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables
 
 SIZES = (256, 512, 1024, 2048, 4096, 8192)
 QUICK_SIZES = (128, 256)
@@ -54,90 +55,6 @@ GENERAL_TABLE = np.array([[3.0, 0.7], [1.3, 2.5]])  # non-symmetric (receiver pa
 EQUALITY_TABLE = np.array([[2.0, 1.0], [1.0, 2.0]])  # LBP converges on the Intel grid with it
 INTEL = "carmen/intel-corrected.log.gz"
 ONLINE_MARGIN = 3  # [cells] the online run near observations only (OnlineMapper margin)
-
-
-# --- the baseline -----------------------------------------------------------------------------
-
-
-class NumpyCheckerboard:
-    """THE BASELINE: checkerboard LBP in vectorised NumPy, one odds ratio per message.
-
-    Same model, schedule and floors as :func:`crfmap.lbp.infer` (cells with even x + y send,
-    then the others); each half-sweep is four strided sub-lattices (even/odd rows) updated
-    with whole-array operations: ``r' = (t00 R + t01) / (t10 R + t11)`` with R the sender's
-    cavity odds. Messages are ``m[d, y, x]`` as in :mod:`crfmap._lbp_kernels`, as odds.
-
-    A good NumPy implementation: float32, no Python loop over cells, chunks of about
-    CHUNK_CELLS cells of a sub-lattice at a time so the temporaries stay in cache.
-
-    >>> nb = NumpyCheckerboard(np.array([[0.9, 0.5, 0.9]]))
-    >>> nb.iterate(20)
-    >>> bool(nb.beliefs()[0, 1] > 0.5)
-    True
-    """
-
-    CHUNK_CELLS = 1 << 16
-
-    def __init__(self, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, dtype=np.float32, pairing="receiver"):
-        observed = np.asarray(observed, np.float64)
-        self.h, self.w = observed.shape
-        self.dtype = np.dtype(dtype)
-        u = np.clip(link_unary(observed, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR)
-        self.U = (u / (1.0 - u)).astype(self.dtype)
-        self.m = np.ones((4, self.h, self.w), self.dtype)
-        tables = directional_tables(hidden, pairing)
-        tables = tables / tables.max()
-        self.t = [tuple(self.dtype.type(v) for v in t.ravel()) for t in tables]
-        co = F.odds_coefficients(tables, np.float64, MESSAGE_FLOOR)
-        self.clamp = co[9] != 0
-        self.lo = self.dtype.type(MESSAGE_FLOOR / (1.0 - MESSAGE_FLOOR))
-        self.hi = self.dtype.type((1.0 - MESSAGE_FLOOR) / MESSAGE_FLOOR)
-
-    def _message(self, d, R):
-        t00, t01, t10, t11 = self.t[d]
-        r = (t00 * R + t01) / (t10 * R + t11)
-        return np.clip(r, self.lo, self.hi, out=r) if self.clamp else r
-
-    def _send(self, ry, cx, i0, i1):
-        """Cells in rows ry + 2i (i0 <= i < i1) and columns cx, cx + 2, ... send their 4 messages."""
-        m, w = self.m, self.w
-        rows = slice(ry + 2 * i0, ry + 2 * i1, 2)
-        U = self.U[rows, cx::2]
-        r0, r1, r2, r3 = (m[d, rows, cx::2] for d in range(4))
-        p = U * r2 * r3  # cavity odds without the east and west messages
-        q = U * r0 * r1  # without the north and south ones
-        nc = U.shape[1]
-        ne = len(range(cx + 1, w, 2))  # senders with an east neighbour
-        if ne:
-            m[0, rows, cx + 1::2] = self._message(0, p[:, :ne] * r0[:, :ne])
-        if cx == 0:  # the sender at x = 0 has no west neighbour
-            if nc > 1:
-                m[1, rows, 1::2][:, :nc - 1] = self._message(1, p[:, 1:] * r1[:, 1:])
-        else:
-            m[1, rows, 0::2][:, :nc] = self._message(1, p * r1)
-        # north: sender row ry + 2i -> row ry + 2i + 1, if inside the grid
-        n_north = min(i1, len(range(ry + 1, self.h, 2))) - i0
-        if n_north > 0:
-            m[2, ry + 1 + 2 * i0:ry + 1 + 2 * (i0 + n_north):2, cx::2] = self._message(2, q[:n_north] * r2[:n_north])
-        # south: sender row ry + 2i -> row ry + 2i - 1, if inside the grid
-        first = 1 if (ry == 0 and i0 == 0) else 0
-        if i1 - i0 > first:
-            y0 = ry + 2 * (i0 + first) - 1
-            m[3, y0:ry + 2 * i1 - 1:2, cx::2] = self._message(3, q[first:] * r3[first:])
-
-    def iterate(self, n=1):
-        """n checkerboard iterations (colour 0 = even x + y sends, then colour 1)."""
-        for _ in range(n):
-            for colour in (0, 1):
-                for ry in (0, 1):
-                    rows = len(range(ry, self.h, 2))
-                    chunk = max(4, self.CHUNK_CELLS // self.w)  # row chunks keep temporaries in cache
-                    for i0 in range(0, rows, chunk):
-                        self._send(ry, (colour + ry) % 2, i0, min(i0 + chunk, rows))
-
-    def beliefs(self) -> np.ndarray:
-        b = self.U.astype(np.float64) * np.prod(self.m.astype(np.float64), axis=0)
-        return b / (1.0 + b)
 
 
 # --- inputs and machine ---------------------------------------------------------------------------
@@ -379,62 +296,6 @@ def compile_seconds(cold=True) -> dict:
                   note="first calls of infer() in a new process: float32, float64, and the parallel pass")
 
 
-def bench_online(quick=False, progress=False):
-    """Scan-by-scan mapping of the Intel lab log at 5 cm, and its final map against an offline run."""
-    from . import paths
-    from .builder import build_grid
-    from .carmen import read_carmen
-    from .online import OnlineMapper
-
-    if not paths.have_data(INTEL):
-        return [record("online-intel", note=f"skipped: {INTEL} not found")]
-    scans = read_carmen(paths.data_file(INTEL)).scans
-    out = []
-    build_grid(scans, 0.05)
-    t_build = _median_time(lambda: build_grid(scans, 0.05), 3)
-    grid = build_grid(scans, 0.05)
-    out.append(record("builder-intel", grid.width, None, 1, None, seconds=t_build, scans=len(scans),
-                      beams=int(scans.ranges.shape[1]), shape=list(grid.shape)))
-    duration = float(scans.stamps[-1] - scans.stamps[0])
-    for method, margin in (("online-intel", None), ("online-intel-margin", ONLINE_MARGIN)):
-        mapper = OnlineMapper.for_scans(scans, 0.05, margin=margin)
-        mapper.integrate(scans.ranges[0], scans.laser_poses[0])  # compile / load the kernels
-        mapper = OnlineMapper.for_scans(scans, 0.05, margin=margin)
-        t0 = time.perf_counter()
-        per_scan = mapper.run(scans, progress=progress)
-        total = time.perf_counter() - t0
-        out.append(record(method, grid.width, np.float32, 1, None, scans=len(scans),
-                          ms_per_scan_median=1e3 * float(np.median(per_scan)),
-                          ms_per_scan_p90=1e3 * float(np.percentile(per_scan, 90)),
-                          seconds_total=total, log_seconds=duration, real_time_factor=duration / total,
-                          radius_m=mapper.radius, max_iter_per_scan=mapper.max_iter, margin_cells=margin,
-                          table=DEFAULT_HIDDEN.tolist()))
-    # the final map against an offline converged run, with a table for which LBP converges here
-    tol = 1e-5 if quick else 1e-7
-    n = 150 if quick else len(scans)
-    part = scans if n == len(scans) else _first_scans(scans, n)
-    t0 = time.perf_counter()
-    mapper = OnlineMapper.for_scans(part, 0.05, hidden=EQUALITY_TABLE)
-    mapper.run(part)
-    final = mapper.finish(tol=tol, max_iter=20000)
-    total = time.perf_counter() - t0
-    offline = infer(build_grid(part, 0.05), EQUALITY_TABLE, tol=tol, max_iter=20000, dtype=np.float32)
-    out.append(record("online-intel-final", grid.width, np.float32, None, None, scans=n, tol=tol,
-                      table=EQUALITY_TABLE.tolist(), finish_iterations=final.iterations,
-                      offline_iterations=offline.iterations, seconds_total=total,
-                      real_time_factor=float(part.stamps[-1] - part.stamps[0]) / total,
-                      max_abs_difference=float(np.abs(final.beliefs.probability - offline.beliefs.probability).max()),
-                      observations_equal_builder=bool(np.array_equal(mapper.observations().probability,
-                                                                      build_grid(part, 0.05).probability))))
-    return out
-
-
-def _first_scans(scans, n):
-    from dataclasses import replace
-
-    return replace(scans, ranges=scans.ranges[:n], laser_poses=scans.laser_poses[:n], stamps=scans.stamps[:n])
-
-
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI)."""
     from tqdm.auto import tqdm
@@ -482,6 +343,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         elif kind == "memory":
             yield peak_memory_per_cell(size)
         elif kind == "online":
+            from .bench_online import bench_online
+
             yield from bench_online(quick=quick)
 
 
