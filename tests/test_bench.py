@@ -36,6 +36,14 @@ def test_quick_bench_records_follow_the_schema(quick_records):
     for r in quick_records:
         if r["method"].startswith("crfmap-converge"):
             assert r["iterations"] >= 1 and r["seconds_to_converge"] > 0 and r["converged"]
+    # PGMax / PyMaxflow rows: a result when installed, else one record each saying how to install
+    from crfmap.bench_external import available
+
+    for name, method in (("pgmax", "pgmax-bp"), ("pymaxflow", "pymaxflow-map")):
+        rows = [r for r in quick_records if r["method"] == method]
+        assert rows, method
+        if available()[name] is None:
+            assert len(rows) == 1 and rows[0]["note"].startswith("not installed")
     bw = [r for r in quick_records if r["method"] == "memory-bandwidth"]
     assert all(r["gbytes_per_second"] > 0 and r["bound_mcells_per_second"]["float32"] > 0 for r in bw)
 

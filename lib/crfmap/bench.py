@@ -25,6 +25,8 @@ Methods:
   Intel lab log at 5 cm (when the data is present): scan-by-scan mapping (LBP on a 4 m disc; with
   ``-margin`` only its cells near observations), the final map against an offline run.
 - ``memory``: peak resident memory of :func:`crfmap.lbp.infer` per cell, in a child process.
+- ``pgmax-bp`` / ``pymaxflow-map``: when installed, PGMax's LBP and a PyMaxflow graph cut on the
+  same model (:mod:`crfmap.bench_external`); a "not installed" record otherwise.
 - ``jit-compile``: the first calls of :func:`crfmap.lbp.infer` in a new process, with an empty
   numba cache (compilation; not in quick runs) and with the package's cache.
 """
@@ -54,6 +56,7 @@ BYTES_PER_CELL_PASS = {"float32": 36, "float64": 72}  # read 4 messages + observ
 GENERAL_TABLE = np.array([[3.0, 0.7], [1.3, 2.5]])  # non-symmetric (receiver pairing)
 EQUALITY_TABLE = np.array([[2.0, 1.0], [1.0, 2.0]])  # LBP converges on the Intel grid with it
 INTEL = "carmen/intel-corrected.log.gz"
+EXTERNAL_MAX_SIZE = 512  # PGMax / PyMaxflow rows (when installed) up to this size: PGMax needs GBs beyond
 ONLINE_MARGIN = 3  # [cells] the online run near observations only (OnlineMapper margin)
 
 
@@ -296,7 +299,8 @@ def compile_seconds(cold=True) -> dict:
                   note="first calls of infer() in a new process: float32, float64, and the parallel pass")
 
 
-def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True):
+def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
+        external=True):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI)."""
     from tqdm.auto import tqdm
 
@@ -311,6 +315,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         tasks.append(("memory", 1024 if quick else max(sizes)))
     if online:
         tasks.append(("online", None))
+    if external:
+        tasks.append(("external", None))
     bar = tqdm(tasks, desc="bench", disable=not progress)
     for kind, size in bar:
         bar.set_postfix_str(f"{kind} {size or ''}".strip())
@@ -346,6 +352,10 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             from .bench_online import bench_online
 
             yield from bench_online(quick=quick)
+        elif kind == "external":
+            from .bench_external import run_external
+
+            yield from run_external([s for s in sizes if s <= EXTERNAL_MAX_SIZE] or [min(sizes)], repeats, quick)
 
 
 def format_record(rec) -> str:

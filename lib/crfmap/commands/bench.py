@@ -21,6 +21,7 @@ def add_parser(sub):
                    help="thread counts to time (default 1 and all cores)")
     p.add_argument("--no-online", action="store_true", help="skip the Intel-log online mapping run")
     p.add_argument("--no-memory", action="store_true", help="skip the peak-memory child process")
+    p.add_argument("--no-external", action="store_true", help="skip the PGMax / PyMaxflow rows (run when installed)")
     return p
 
 
@@ -39,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
     if any(t < 1 or t > cores for t in threads):
         raise InputError("--threads", f"thread counts must be between 1 and {cores}, got {list(threads)}")
     for rec in run_bench(sizes=args.sizes, quick=args.quick, repeats=args.repeats, threads=threads,
-                         progress=True, online=not args.no_online, memory=not args.no_memory):
+                         progress=True, online=not args.no_online, memory=not args.no_memory,
+                         external=not args.no_external):
         print(to_json(rec) if args.json else format_record(rec), flush=True)
     return 0
