@@ -58,26 +58,6 @@ def test_blocked_pass_uses_several_bands_and_equals_plain():
     np.testing.assert_allclose(changes[[5, 11]], plain.max_change[[5, 11]], atol=1e-10)
 
 
-@pytest.mark.parametrize("strip", [5, 16, 37])
-@pytest.mark.parametrize("threads", [1, 2])
-def test_column_strips_equal_plain(monkeypatch, strip, threads):
-    """Passes in skewed column strips (wide grids) give the plain iterations, with bands and bounded."""
-    monkeypatch.setattr(F, "STRIP_CELLS", strip)
-    obs = RNG.uniform(0.0, 1.0, (700, 130))
-    hidden = [[3.0, 0.7], [1.3, 2.5]]
-    block = F.PackedBlock(700, 130, np.float64, directional_tables(hidden), MESSAGE_FLOOR)
-    assert block.strip == strip
-    beliefs, messages, changes = packed_run(obs, hidden, "receiver", [5, 7, 1], threads=threads)
-    plain = infer(obs, hidden, LINK, max_iter=13, tol=0.0, kernel="plain")
-    np.testing.assert_allclose(beliefs, plain.beliefs.probability, atol=1e-10)
-    np.testing.assert_allclose(messages, plain.messages, atol=1e-10)
-    np.testing.assert_allclose(changes[[4, 11, 12]], plain.max_change[[4, 11, 12]], atol=1e-10)
-    region = disc_region(OccupancyGrid(obs, resolution=1.0), (60.0, 300.0), 55.0)
-    fast = infer(obs, hidden, LINK, region=region, max_iter=11, tol=0.0, kernel="fast", threads=threads)
-    plain = infer(obs, hidden, LINK, region=region, max_iter=11, tol=0.0, kernel="plain")
-    np.testing.assert_allclose(fast.beliefs.probability, plain.beliefs.probability, atol=1e-10)
-
-
 def test_float32_close_to_float64():
     obs = RNG.uniform(0.0, 1.0, (120, 130))
     b64, _, _ = packed_run(obs, [[10.0, 1.0], [1.0, 10.0]], "receiver", [4, 4])

@@ -210,82 +210,56 @@ def _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb,
 
 
 @njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
-def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb, xa, xb):
-    """Colour c of row y sends: the cells of the row's active segments within columns [xa, xb)."""
+def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb):
+    """Colour c of row y sends: the cells of the row's active segments (one row of a half-sweep)."""
     ty = y // tile_h
     off = (y + c) & 1
-    ka = (xa - off + 1) >> 1  # first plane index with x >= xa
-    kb = (xb - off + 1) >> 1  # first plane index with x >= xb
     for s in range(nseg[ty]):
-        k0 = max(max((segs[ty, s, 0] - off + 1) >> 1, lo_k[c, y]), ka)
-        k1 = min(min((segs[ty, s, 1] - off + 1) >> 1, hi_k[c, y]), kb)
+        k0 = max((segs[ty, s, 0] - off + 1) >> 1, lo_k[c, y])
+        k1 = min((segs[ty, s, 1] - off + 1) >> 1, hi_k[c, y])
         _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty)
-
-
-@njit(inline="always", cache=True)
-def _strip_columns(st, n_strips, strip, j, w):
-    """Columns [xa, xb) of column strip ``st`` at phase j: skewed left by one column per phase.
-
-    Strips run left to right, each through all its phases. A sender at column x in phase j
-    depends on columns x - 1 .. x + 1 in phase j - 1, whose strips (by x + j - 1 .. x + j + 1
-    against the strip edges) are this one or earlier ones; and the message it overwrites was
-    last read in phase j - 1 by a cell of this strip or an earlier one. So any strip width
-    gives the same iterations as no strips, while a strip's live rows stay in cache.
-    """
-    if n_strips == 1:
-        return 0, w
-    xa = max(st * strip - j, 0)
-    xb = w if st == n_strips - 1 else min(max((st + 1) * strip - j, 0), w)
-    return xa, xb
 
 
 # --- passes ----------------------------------------------------------------------------------
 # Rows are cut into tiles of tile_h rows; in each row tile, only the cells of the segments
 # segs[ty, :nseg[ty]] (column ranges [x0, x1)) send: the others are frozen. Changes are
 # max-accumulated per column into cb[row tile, :] (threads never share a row tile: band edges
-# are multiples of tile_h) and give the largest change per tile. On wide grids each stage runs
-# in column strips of ``strip`` cells (0: one strip), so its live rows fit in the core's cache.
+# are multiples of tile_h) and give the largest change per tile.
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi,
-                    phases, measure_from, cb, strip):
+                    phases, measure_from, cb):
     """Stage 1 of a pass on rows [y0, y1): phase j covers rows shrunk by j at inner edges.
 
     Edges at ``ylo`` / ``yhi`` (the first / last row that has senders) do not shrink.
     Wavefront order: at step s, phase j works on row s - j, so the rows a phase needs were
     finished by phase j - 1 one step earlier and every live row stays in cache.
     """
-    n_strips = 1 if strip <= 0 else (w + strip - 1) // strip
-    for st in range(n_strips):
-        for s in range(y0, y1 + phases):
-            for j in range(phases):
-                y = s - j
-                lo_row = y0 + j if y0 > ylo else ylo
-                hi_row = y1 - j if y1 < yhi else yhi
-                if y < lo_row or y >= hi_row:
-                    continue
-                xa, xb = _strip_columns(st, n_strips, strip, j, w)
-                _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
-                           (j >> 1) >= measure_from, cb, xa, xb)
+    for s in range(y0, y1 + phases):
+        for j in range(phases):
+            y = s - j
+            lo_row = y0 + j if y0 > ylo else ylo
+            hi_row = y1 - j if y1 < yhi else yhi
+            if y < lo_row or y >= hi_row:
+                continue
+            _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+                       (j >> 1) >= measure_from, cb)
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edge, ylo, yhi,
-                   phases, measure_from, cb, strip):
+                   phases, measure_from, cb):
     """Stage 2: the inverted trapezoid around the band edge ``edge``, rows [edge - j, edge + j)."""
-    n_strips = 1 if strip <= 0 else (w + strip - 1) // strip
-    for st in range(n_strips):
-        for j in range(1, phases):
-            xa, xb = _strip_columns(st, n_strips, strip, j, w)
-            for y in range(max(edge - j, ylo), min(edge + j, yhi)):
-                _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
-                           (j >> 1) >= measure_from, cb, xa, xb)
+    for j in range(1, phases):
+        for y in range(max(edge - j, ylo), min(edge + j, yhi)):
+            _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+                       (j >> 1) >= measure_from, cb)
 
 
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass_parallel(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations,
-                   measure_from, cb, strip):
+                   measure_from, cb):
     """``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
     Rows outside [edges[0], edges[-1]) must hold no sender. Iterations from ``measure_from``
@@ -295,19 +269,19 @@ def _pass_parallel(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, 
     nb = edges.shape[0] - 1
     for b in prange(nb):
         _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b],
-                        edges[b + 1], edges[0], edges[nb], phases, measure_from, cb, strip)
+                        edges[b + 1], edges[0], edges[nb], phases, measure_from, cb)
     for b in prange(nb - 1):
         _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b + 1],
-                       edges[0], edges[nb], phases, measure_from, cb, strip)
+                       edges[0], edges[nb], phases, measure_from, cb)
     return 0
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass_serial(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, ylo, yhi, iterations,
-                 measure_from, cb, strip):
+                 measure_from, cb):
     """One band, rows [ylo, yhi), of :func:`_pass_parallel` (small jobs: no thread start-up)."""
     _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, ylo, yhi, ylo, yhi,
-                    2 * iterations, measure_from, cb, strip)
+                    2 * iterations, measure_from, cb)
     return 0
 
 

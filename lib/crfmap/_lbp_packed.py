@@ -124,7 +124,6 @@ TILE_ROWS = 16  # [cells] tiles for measuring changes and freezing settled parts
 TILE_COLS = 64  # [cells]
 SPARSE_FRACTION = 0.5  # iterate tile by tile once fewer tiles than this still move
 SPARSE_CELLS = 1 << 18  # grids with fewer senders never freeze tiles
-STRIP_CELLS = 1024  # [cells] column strips of a pass on wider grids (live rows stay in L2)
 
 
 def odds_coefficients(tables, dtype, floor) -> np.ndarray:
@@ -194,7 +193,6 @@ class PackedBlock:
         self.lo_k, self.hi_k = full_extents(self.h, self.w)
         self._extents_changed()
         self.cell_updates = 0  # cells that sent, summed over iterations (work done)
-        self.strip = STRIP_CELLS if self.w > 2 * STRIP_CELLS else 0  # column strips on wide grids
 
     # --- filling it ---------------------------------------------------------------------------
     def set_unary(self, probability, link, y0=0, x0=0):
@@ -332,9 +330,9 @@ class PackedBlock:
         args = (self.msg, self.un, self.act, self.use_act, self.lo_k, self.hi_k, segs, nseg, TILE_ROWS,
                 self.h, self.w, self.co, self.lo, self.hi)
         if len(edges) == 2:
-            _pass_serial(*args, int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb, self.strip)
+            _pass_serial(*args, int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb)
         else:
-            _pass_parallel(*args, edges, int(iterations), int(measure_from), cb, self.strip)
+            _pass_parallel(*args, edges, int(iterations), int(measure_from), cb)
         if active is None:
             cells = self.active_cells
         self.cell_updates += cells * iterations
