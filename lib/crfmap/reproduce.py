@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import time
 from pathlib import Path
 
 from . import paths
+from .errors import DataMissingError
 
 
 def notebooks(only=None) -> list[Path]:
@@ -21,6 +23,23 @@ def notebooks(only=None) -> list[Path]:
     if only:
         found = [p for p in found if any(p.name.startswith(prefix) for prefix in only)]
     return found
+
+
+def data_needed(notebook: Path) -> list[str]:
+    """The shared-data files (relative to :func:`crfmap.paths.data_root`) a notebook reads with ``data_file``."""
+    return sorted(set(re.findall(r'data_file\(\\"([^"\\]+)\\"\)', Path(notebook).read_text())))
+
+
+def missing_data(todo) -> list[str]:
+    """One line per shared-data file the notebooks need and this machine lacks: what to download, where."""
+    lines = []
+    for relative in sorted({f for nb in todo for f in data_needed(nb)}):
+        try:
+            paths.data_file(relative)
+        except DataMissingError as error:
+            users = ", ".join(nb.name for nb in todo if relative in data_needed(nb))
+            lines.append(f"{error} -- needed by {users}")
+    return lines
 
 
 def execute(notebook: Path, parameters: dict | None = None, output_dir: Path | None = None,
@@ -47,8 +66,14 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from tqdm.auto import tqdm
 
-    paths.ensure_output_dirs()
     todo = notebooks(args.only)
+    missing = missing_data(todo)
+    if missing:  # say it before anything runs, not after half the figures were regenerated
+        for line in missing:
+            print(f"reproduce: {line}", file=sys.stderr)
+        print("reproduce: see data/README.md; nothing was run", file=sys.stderr)
+        return 2
+    paths.ensure_output_dirs()
     params = {"quick": True} if args.quick else {}
     timings = {}
     start = time.perf_counter()
@@ -56,9 +81,9 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         try:
             execute(nb, params)
-        except Exception as exc:  # papermill re-raises the cell's error; say which notebook
-            print(f"reproduce: {nb.name} failed: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}",
-                  file=sys.stderr)
+        except Exception as exc:  # papermill re-raises the cell's error; say which notebook and what
+            what = f"{exc.ename}: {exc.evalue}" if hasattr(exc, "ename") else f"{type(exc).__name__}: {exc}"
+            print(f"reproduce: {nb.name} failed: {what.splitlines()[0] if what else ''}", file=sys.stderr)
             print(f"reproduce: the executed notebook with the traceback is {paths.OUT / 'notebooks' / nb.name}",
                   file=sys.stderr)
             return 1
