@@ -18,6 +18,19 @@ def _line_length(x0, y0, x1, y1):
     return max(abs(x1 - x0), abs(y1 - y0)) + 1
 
 
+@njit(inline="always", cache=True, nogil=True)
+def _step(x, y, err, dx, dy, sx, sy):
+    """One step along the line: Listing 1's error term decides which coordinates move."""
+    e2 = 2 * err
+    if e2 > -dy:
+        err -= dy
+        x += sx
+    if e2 < dx:
+        err += dx
+        y += sy
+    return x, y, err
+
+
 @njit(cache=True, nogil=True)
 def _bresenham(x0, y0, x1, y1, out):
     """Write the cells of the line (x0, y0) -> (x1, y1) into ``out[:, 0:2]`` as (x, y); return the count.
@@ -38,13 +51,7 @@ def _bresenham(x0, y0, x1, y1, out):
         n += 1
         if x == x1 and y == y1:
             break
-        e2 = 2 * err
-        if e2 > -dy:
-            err -= dy
-            x += sx
-        if e2 < dx:
-            err += dx
-            y += sy
+        x, y, err = _step(x, y, err, dx, dy, sx, sy)
     return n
 
 
@@ -64,13 +71,7 @@ def _first_hit(occupied, x0, y0, x1, y1):
     x, y = x0, y0
     lx, ly = x0, y0
     while not (x == x1 and y == y1):
-        e2 = 2 * err
-        if e2 > -dy:
-            err -= dy
-            x += sx
-        if e2 < dx:
-            err += dx
-            y += sy
+        x, y, err = _step(x, y, err, dx, dy, sx, sy)
         if x < 0 or y < 0 or x >= w or y >= h:
             return lx, ly, False
         if occupied[y, x]:
