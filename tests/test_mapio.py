@@ -385,21 +385,20 @@ def test_bad_save_options(tmp_path, kwargs, problem):
 
 
 # --- atomic saving --------------------------------------------------------------------------
-def test_failed_image_write_leaves_nothing(tmp_path, monkeypatch):
-    def broken(path, *args):
-        Path(path).write_bytes(b"P5\n")  # half an image, then a crash
-        raise OSError("disk full")
-    monkeypatch.setattr(mapio, "_write_image", broken)
-    with pytest.raises(OSError, match="disk full"):
-        save_map(random_grid(0), tmp_path / "m.yaml")
-    assert no_leftovers(tmp_path) == []
+def _half_image(path, *args):
+    Path(path).write_bytes(b"P5\n")  # half an image, then a crash
+    raise OSError("disk full")
 
 
-def test_failed_yaml_write_removes_the_new_image(tmp_path, monkeypatch):
-    def broken(path, text):
-        Path(path).write_text(text[:5])
-        raise OSError("disk full")
-    monkeypatch.setattr(mapio, "_write_text", broken)
+def _half_yaml(path, text):
+    Path(path).write_text(text[:5])
+    raise OSError("disk full")
+
+
+@pytest.mark.parametrize("writer, broken", [("_write_image", _half_image), ("_write_text", _half_yaml)],
+                         ids=["image write fails", "yaml write fails (the new image is removed)"])
+def test_failed_write_leaves_nothing(tmp_path, monkeypatch, writer, broken):
+    monkeypatch.setattr(mapio, writer, broken)
     with pytest.raises(OSError, match="disk full"):
         save_map(random_grid(0), tmp_path / "m.yaml")
     assert no_leftovers(tmp_path) == []
