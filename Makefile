@@ -21,10 +21,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q
 
 reproduce: $(STAMP)
-	$(BIN)/python -m crfmap.reproduce
+	$(BIN)/python -m crfmap.repro.reproduce
 
 bench: $(STAMP)
 	$(BIN)/crfmap bench

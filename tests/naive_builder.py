@@ -1,4 +1,4 @@
-"""Slow, obviously correct references for crfmap.builder: plain Python loops, no numba."""
+"""Slow, obviously correct references for crfmap.mapping.builder: plain Python loops, no numba."""
 import math
 
 import numpy as np

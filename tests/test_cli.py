@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from crfmap.cli import main
-from crfmap.mapio import load_grid, save_grid
+from crfmap.io.grid_files import load_grid, save_grid
 from crfmap.grid import OccupancyGrid
-from crfmap.lbp import infer
+from crfmap.crf.lbp import infer
 from crfmap.paths import data_file, have_data
 
 OLIN = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"

@@ -4,7 +4,7 @@ An occupancy grid becomes a CRF (a hidden 4-connected lattice of binary cells pl
 observed layer holding the grid's P(occupied)); loopy belief propagation infers each
 cell's occupancy from its neighbours; the potentials can be learned.
 """
-from .errors import CrfmapError, InputError, DataMissingError
-from .grid import OccupancyGrid, UNKNOWN
+from crfmap.errors import CrfmapError, InputError, DataMissingError
+from crfmap.grid import OccupancyGrid, UNKNOWN
 
 __version__ = "0.1.0"

@@ -9,7 +9,7 @@ import argparse
 import importlib
 import sys
 
-from .errors import CrfmapError
+from crfmap.errors import CrfmapError
 
 # Sub-command name -> module in crfmap.commands providing add_parser(subparsers) and run(args).
 COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench")

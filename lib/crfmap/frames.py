@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .errors import InputError
+from crfmap.errors import InputError
 
 TWO_PI = 2.0 * math.pi
 

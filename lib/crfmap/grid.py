@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import InputError
+from crfmap.errors import InputError
 
 UNKNOWN = 0.5  # P(occupied) of a cell nobody has seen
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .errors import DataMissingError
+from crfmap.errors import DataMissingError
 
 PROJECT_ROOT = Path(os.environ.get("CRFMAP_ROOT", Path(__file__).resolve().parents[2]))
 NOTEBOOKS = PROJECT_ROOT / "notebooks"

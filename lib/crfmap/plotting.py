@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .grid import OccupancyGrid
+from crfmap.grid import OccupancyGrid
 
 
 def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = False, **kwargs):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .errors import InputError
+from crfmap.errors import InputError
 
 
 @njit(cache=True, nogil=True)
@@ -32,7 +32,7 @@ def _step(x, y, err, dx, dy, sx, sy):
 
 
 @njit(cache=True, nogil=True)
-def _bresenham(x0, y0, x1, y1, out):
+def bresenham_step(x0, y0, x1, y1, out):
     """Write the cells of the line (x0, y0) -> (x1, y1) into ``out[:, 0:2]`` as (x, y); return the count.
 
     ``out`` needs at least ``_line_length(...)`` rows. At a tie (the diagonal-gap ambiguity
@@ -56,7 +56,7 @@ def _bresenham(x0, y0, x1, y1, out):
 
 
 @njit(cache=True, nogil=True)
-def _first_hit(occupied, x0, y0, x1, y1):
+def first_hit_kernel(occupied, x0, y0, x1, y1):
     """First cell on the line (x0, y0) -> (x1, y1) with ``occupied[y, x]`` true, leaving the grid ends the ray.
 
     Returns (x, y, hit): the occupied cell and True, or the last in-grid cell and False.
@@ -93,7 +93,7 @@ def line_cells(x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
         ints.append(int(v))
     x0, y0, x1, y1 = ints
     out = np.empty((_line_length(x0, y0, x1, y1), 2), dtype=np.int64)
-    n = _bresenham(x0, y0, x1, y1, out)
+    n = bresenham_step(x0, y0, x1, y1, out)
     return out[:n]
 
 
@@ -118,5 +118,5 @@ def first_hit(occupied, start, end):
         raise InputError("occupied", f"expected a non-empty 2-D [y, x] array, got shape {occ.shape}")
     x0, y0 = (int(v) for v in start)
     x1, y1 = (int(v) for v in end)
-    x, y, hit = _first_hit(occ.astype(np.bool_), x0, y0, x1, y1)
+    x, y, hit = first_hit_kernel(occ.astype(np.bool_), x0, y0, x1, y1)
     return (int(x), int(y)) if hit else None

@@ -1,4 +1,4 @@
-"""``crfmap bench``: how fast LBP runs here, against a vectorised NumPy baseline (see crfmap.bench)."""
+"""``crfmap bench``: how fast LBP runs here, against a vectorised NumPy baseline (see crfmap.bench.suite)."""
 from __future__ import annotations
 
 import argparse
@@ -28,8 +28,8 @@ def add_parser(sub):
 def run(args: argparse.Namespace) -> int:
     import numba
 
-    from ..bench import format_record, run as run_bench, to_json
-    from ..errors import InputError
+    from crfmap.bench.suite import format_record, run as run_bench, to_json
+    from crfmap.errors import InputError
 
     if args.sizes and any(n < 16 or n > 32768 for n in args.sizes):
         raise InputError("--sizes", f"grid sides must be between 16 and 32768 cells, got {args.sizes}")

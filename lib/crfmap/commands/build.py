@@ -5,7 +5,7 @@ import argparse
 import time
 from pathlib import Path
 
-from ..errors import InputError
+from crfmap.errors import InputError
 
 CARMEN_SUFFIXES = (".log", ".log.gz", ".clf", ".clf.gz")
 GRID_SUFFIXES = (".yaml", ".yml", ".npy")
@@ -24,10 +24,10 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None):
     """
     path = Path(path)
     if not is_carmen_log(path):
-        from ..bagio import read_bag
+        from crfmap.io.bag_reader import read_bag
 
         return read_bag(path, scan_topic=scan_topic, pose_source=pose_source, laser_mount=laser_mount)
-    from ..carmen import read_carmen
+    from crfmap.io.carmen import read_carmen
 
     if scan_topic is not None:
         raise InputError("--scan-topic", "applies to bags only, not to CARMEN logs")
@@ -38,7 +38,7 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None):
     if pose_source == "tf":
         raise InputError("--pose-source", "a CARMEN log has no tf; use truth (corrected poses) or odom")
     if pose_source == "odom":
-        from ..bagio import interpolate_poses
+        from crfmap.io.bag_reader import interpolate_poses
 
         if rec.odometry is None:
             raise InputError(path, "pose source 'odom': the log has no ODOM lines")
@@ -89,8 +89,8 @@ def add_parser(sub):
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..builder import build_grid
-    from ..mapio import save_grid
+    from crfmap.mapping.builder import build_grid
+    from crfmap.io.grid_files import save_grid
 
     out = Path(args.output)
     if not str(out).lower().endswith(GRID_SUFFIXES):

@@ -5,8 +5,8 @@ import argparse
 import time
 from pathlib import Path
 
-from ..errors import InputError
-from .build import add_bag_options
+from crfmap.errors import InputError
+from crfmap.commands.build import add_bag_options
 
 
 def add_parser(sub):
@@ -25,8 +25,8 @@ def add_parser(sub):
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..bagio import write_bag
-    from .build import load_recording
+    from crfmap.io.bag_reader import write_bag
+    from crfmap.commands.build import load_recording
 
     out = Path(args.output)
     fmt = args.format or ("ros1" if out.suffix == ".bag" else "ros2")

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..errors import InputError
+from crfmap.errors import InputError
 
 
 def add_parser(sub):
@@ -22,11 +22,11 @@ def add_parser(sub):
     p.add_argument("--tol", type=float, default=1e-5, help="stop when the largest message change is below this")
     p.add_argument("--damping", type=float, default=0.0, help="weight of the old message, in [0, 1)")
     p.add_argument("--pairing", default="receiver", choices=["receiver", "oriented"],
-                   help="how a non-symmetric hidden table applies to an edge (see crfmap.potentials)")
+                   help="how a non-symmetric hidden table applies to an edge (see crfmap.crf.potentials)")
     p.add_argument("--float32", action="store_true", help="compute in float32 (faster, less memory)")
     p.add_argument("--margin", type=int, default=None, metavar="CELLS",
                    help="infer only cells within CELLS of an observed cell; the rest stay unknown "
-                   "(default: the whole grid, as the thesis; see crfmap.lbp.near_known)")
+                   "(default: the whole grid, as the thesis; see crfmap.crf.lbp.near_known)")
     p.add_argument("--free-thresh", type=float, default=None,
                    help="override a YAML input's free_thresh when loading (nav2's map_saver writes 0.25, "
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
@@ -39,9 +39,10 @@ def add_parser(sub):
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ..lbp import infer
-    from ..mapio import load_grid, load_map, save_grid
-    from ..potentials import check_table
+    from crfmap.crf.lbp import infer
+    from crfmap.io.grid_files import load_grid, save_grid
+    from crfmap.io.map_server import load_map
+    from crfmap.crf.potentials import check_table
 
     if args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
@@ -53,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         grid = load_grid(args.input)
     region = None
     if args.margin is not None:
-        from ..lbp import near_known
+        from crfmap.crf.lbp import near_known
 
         region = near_known(grid, args.margin)
     result = infer(grid, hidden, link, schedule=args.schedule, max_iter=args.max_iter, tol=args.tol,

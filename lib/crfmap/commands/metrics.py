@@ -17,9 +17,9 @@ def add_parser(sub):
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import InputError
-    from ..mapio import load_grid
-    from ..metrics import evaluate
+    from crfmap.errors import InputError
+    from crfmap.io.grid_files import load_grid
+    from crfmap.assess.metrics import evaluate
 
     pred = load_grid(args.prediction)
     truth = load_grid(args.truth)

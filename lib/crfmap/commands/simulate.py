@@ -1,7 +1,7 @@
 """``crfmap simulate SCENE OUT_BAG``: drive a simulated robot through a scene and record a ROS bag.
 
 The bag holds the laser scans, odometry, true poses, Twist commands and the ground-truth
-map (see :mod:`crfmap.bagio`). OUT_BAG must not exist yet unless ``--overwrite`` is
+map (see :mod:`crfmap.io.bag_reader`). OUT_BAG must not exist yet unless ``--overwrite`` is
 given; the bag is written to a temporary name and renamed when complete, so an
 interrupted run leaves nothing behind.
 
@@ -16,11 +16,11 @@ import math
 import time
 from pathlib import Path
 
-from ..errors import InputError
+from crfmap.errors import InputError
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from ..scenes import MODES, SCENES
+    from crfmap.world.scenes import MODES, SCENES
 
     p = subparsers.add_parser(
         "simulate",
@@ -62,8 +62,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 def build_recording(args):
     """The simulated :class:`~crfmap.recording.Recording` the command would write (no file touched)."""
-    from ..scenes import make_scene
-    from ..simulator import LEGACY_NO_RETURN, Laser, simulate
+    from crfmap.world.scenes import make_scene
+    from crfmap.sim.simulator import LEGACY_NO_RETURN, Laser, simulate
 
     scene_kwargs = {}
     if args.scene_seed is not None:
@@ -99,7 +99,7 @@ def run(args) -> int:
         raise InputError(out, "already exists; pass --overwrite to replace it")
     started = time.perf_counter()
     recording = build_recording(args)
-    from ..bagio import write_bag
+    from crfmap.io.bag_reader import write_bag
 
     write_bag(recording, out, fmt=args.format)
     if not args.quiet:

@@ -1,0 +1,46 @@
+"""How good a grid is, and learning the potentials that make it better: metrics, cross-validation, learning.
+
+Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
+
+- :mod:`crfmap.assess.metrics`: ``evaluate``, ``Report``, ``mse``, ``confusion``, ``roc_curve``, ``auc``
+- :mod:`crfmap.assess.crossval`: ``cross_validate``, ``CrossValidation``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean``
+- :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
+"""
+from __future__ import annotations
+
+import importlib
+
+_API = {
+    "evaluate": "metrics",
+    "Report": "metrics",
+    "mse": "metrics",
+    "confusion": "metrics",
+    "roc_curve": "metrics",
+    "auc": "metrics",
+    "cross_validate": "crossval",
+    "CrossValidation": "crossval",
+    "leave_one_out": "crossval",
+    "random_folds": "crossval",
+    "block_folds": "crossval",
+    "neighbour_mean": "crossval",
+    "learn_thesis": "learning",
+    "learn_gradient": "learning",
+    "learn_pseudolikelihood": "learning",
+    "LearningResult": "learning",
+    "lbp_mse": "learning",
+    "rescale": "learning",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -1,0 +1,327 @@
+"""How fast crfmap's LBP runs, measured against a vectorised NumPy baseline in the same run.
+
+:func:`run` yields one record (a dict) per measurement; ``crfmap bench`` prints them (``--json``:
+one JSON object per line). Every record has ``method``, ``size`` (cells per side, or None),
+``dtype``, ``threads``, ``seconds_per_iteration`` and ``mcells_per_second`` (None where they do
+not apply); convergence records add ``iterations`` and ``seconds_to_converge``. Times are
+medians over ``repeats``; the first call of each kernel (JIT compilation or loading numba's
+cache) is timed apart, in ``compile`` records.
+
+Methods:
+
+- ``numpy-baseline``: THE BASELINE, :class:`NumpyCheckerboard`, written here: the same
+  checkerboard schedule, one odds ratio per message, float32, whole-array NumPy operations.
+- ``crfmap-fast``: the fast kernels (:mod:`crfmap.crf._lbp_fast`), blocks of ``block`` iterations
+  per trip through memory; ``-general`` with a non-symmetric table, ``-bounded`` on a disc
+  (bounded LBP) covering about half the grid; ``crfmap-infer``: :func:`crfmap.crf.lbp.infer`
+  end to end (packing, iterations, beliefs, unpacking).
+- ``crfmap-plain``: the reference kernels (:mod:`crfmap.crf._lbp_kernels`), small grids only.
+- ``memory-bandwidth``: a streaming triad over 2 x 256 MB; ``bound_mcells_per_second`` is the
+  rate at which one pass per iteration (36 bytes per cell in float32) would saturate it.
+- ``converge``: noisy office floors (flip noise 0.2), table [[10, 1], [1, 10]], until the
+  largest message change is below 1e-4: fast kernel with frozen tiles (default), exact
+  (``freeze=0``), and the plain kernel on small grids, with the largest belief difference.
+- ``online-intel`` / ``online-intel-margin`` / ``online-intel-final`` / ``builder-intel``: the
+  Intel lab log at 5 cm (when the data is present): scan-by-scan mapping (LBP on a 4 m disc; with
+  ``-margin`` only its cells near observations), the final map against an offline run.
+- ``memory``: peak resident memory of :func:`crfmap.crf.lbp.infer` per cell, in a child process.
+- ``pgmax-bp`` / ``pymaxflow-map``: when installed, PGMax's LBP and a PyMaxflow graph cut on the
+  same model (:mod:`crfmap.bench.external`); a "not installed" record otherwise.
+- ``jit-compile``: the first calls of :func:`crfmap.crf.lbp.infer` in a new process, with an empty
+  numba cache (compilation; not in quick runs) and with the package's cache.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from crfmap.crf import packed as F
+from crfmap.crf.lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, infer
+from crfmap.bench.baseline import NumpyCheckerboard
+from crfmap.bench.common import (
+    SIZES,
+    QUICK_SIZES,
+    CONVERGE_SIZES,
+    QUICK_CONVERGE_SIZES,
+    CONVERGE_TOL,
+    BYTES_PER_CELL_PASS,
+    GENERAL_TABLE,
+    EQUALITY_TABLE,
+    INTEL,
+    EXTERNAL_MAX_SIZE,
+    ONLINE_MARGIN,
+    bench_grid,
+    memory_bandwidth,
+    record,
+    median_time,
+    with_threads,
+    WORK,
+    QUICK_WORK,
+)
+from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables
+
+def _iterations_for(size, block, work=WORK):
+    """Iterations per timed repeat: about ``work`` cell updates, a multiple of ``block``."""
+    return max(block, int(round(work / (size * size) / block)) * block)
+
+
+def bench_fast(size, dtype, threads, repeats, hidden=DEFAULT_HIDDEN, bounded=False, block=DEFAULT_BLOCK,
+               method="crfmap-fast", work=WORK):
+    """Throughput of the fast kernel: passes of ``block`` iterations, the last of each measured."""
+    obs = bench_grid(size)
+    packed = F.PackedBlock(size, size, dtype, directional_tables(hidden), MESSAGE_FLOOR)
+    packed.set_unary(obs, DEFAULT_LINK)
+    if bounded:  # a disc of radius size / 2.5 around the centre: about half the cells
+        r = size / 2.5
+        ys = np.arange(size)
+        half = np.sqrt(np.clip(r * r - (ys + 0.5 - size / 2) ** 2, 0.0, None))
+        x_from = np.ceil(size / 2 - half - 0.5).clip(0, size).astype(np.int64)
+        x_to = np.maximum((np.floor(size / 2 + half - 0.5) + 1).clip(0, size).astype(np.int64), x_from)
+        packed.set_rows(0, x_from, x_to)
+    cells = packed.active_cells
+    n = _iterations_for(size, block, work)
+
+    def go():
+        for _ in range(n // block):
+            packed.run_pass(block, threads, measure=True, per_tile=False)
+
+    t0 = time.perf_counter()
+    with_threads(threads, lambda: packed.run_pass(1, threads, measure=True, per_tile=False))
+    first = time.perf_counter() - t0
+    seconds = with_threads(threads, lambda: median_time(go, repeats)) / n
+    rec = record(method, size, dtype, threads, seconds, iterations_timed=n, block=block, first_call_seconds=first)
+    rec["mcells_per_second"] = cells / seconds / 1e6  # cells that actually send
+    rec["cells"] = cells
+    return rec
+
+
+def bench_baseline(size, repeats, dtype=np.float32):
+    nb = NumpyCheckerboard(bench_grid(size), dtype=dtype)
+    n = max(1, min(8, int(2e7 / (size * size))))
+    nb.iterate(1)
+    seconds = median_time(lambda: nb.iterate(n), repeats) / n
+    return record("numpy-baseline", size, dtype, 1, seconds, iterations_timed=n,
+                  note="vectorised NumPy checkerboard, odds ratios (the baseline)")
+
+
+def bench_plain(size, repeats, threads):
+    obs = bench_grid(size)
+    infer(obs, max_iter=1, tol=0.0, kernel="plain", dtype=np.float32, threads=threads)
+    n = 4
+    seconds = median_time(lambda: infer(obs, max_iter=n, tol=0.0, kernel="plain", dtype=np.float32,
+                                         threads=threads), repeats) / n
+    return record("crfmap-plain", size, np.float32, threads, seconds, iterations_timed=n)
+
+
+def bench_infer(size, dtype, threads, repeats, block=DEFAULT_BLOCK, work=WORK):
+    obs = bench_grid(size)
+    n = _iterations_for(size, block, work)
+    seconds = median_time(lambda: infer(obs, max_iter=n, tol=0.0, dtype=dtype, threads=threads, block=block),
+                           repeats) / n
+    return record("crfmap-infer", size, dtype, threads, seconds, iterations_timed=n,
+                  note="infer() end to end: packing, iterations, beliefs, unpacking")
+
+
+def agreement(size=96, iterations=7, seed=1) -> dict:
+    """Largest belief difference between the baseline and crfmap after the same iterations."""
+    obs = bench_grid(size, seed)
+    nb = NumpyCheckerboard(obs, dtype=np.float64)
+    nb.iterate(iterations)
+    fast = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64)
+    plain = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64, kernel="plain")
+    return record("agreement", size, np.float64, None, None, iterations=iterations,
+                  max_difference_baseline_vs_fast=float(np.abs(nb.beliefs() - fast.beliefs.probability).max()),
+                  max_difference_plain_vs_fast=float(np.abs(plain.beliefs.probability - fast.beliefs.probability).max()))
+
+
+def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL):
+    """Time to convergence on the noisy office floor, with and without frozen tiles."""
+    obs = bench_grid(size, kind="office")
+    out = []
+    exact = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, freeze=0.0)
+    fast = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads)
+    fast = min((fast, infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads)), key=lambda r: r.seconds)
+    diff = float(np.abs(fast.beliefs.probability - exact.beliefs.probability).max())
+    for name, r in (("converge", fast), ("converge-exact", exact)):
+        out.append(record(f"crfmap-{name}", size, np.float32, threads, r.seconds / max(r.iterations, 1),
+                          iterations=r.iterations, seconds_to_converge=r.seconds, converged=r.converged,
+                          tol=tol, max_belief_difference_vs_exact=diff if name == "converge" else 0.0,
+                          note="Mcell/s here is cells x iterations / time: frozen tiles count but cost nothing"))
+    if with_plain:
+        plain = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, kernel="plain")
+        out.append(record("crfmap-converge-plain", size, np.float32, threads, plain.seconds / max(plain.iterations, 1),
+                          iterations=plain.iterations, seconds_to_converge=plain.seconds, converged=plain.converged,
+                          tol=tol, max_belief_difference_vs_exact=float(
+                              np.abs(plain.beliefs.probability - exact.beliefs.probability).max())))
+    return out
+
+
+def peak_memory_per_cell(size, dtype="float32", block=DEFAULT_BLOCK) -> dict:
+    """Peak memory :func:`crfmap.crf.lbp.infer` adds beyond its float64 input, per cell (child process).
+
+    ``bytes_per_cell``: the peak resident set during the call (Linux resets its high-water mark
+    through /proc/self/clear_refs) minus the resident set before it; ``array_bytes_per_cell``:
+    the peak of the arrays it allocates (tracemalloc sees every NumPy allocation).
+    """
+    code = (
+        "import tracemalloc, numpy as np\n"
+        "from crfmap.crf.lbp import infer\n"
+        "def status(key):\n"
+        "    for line in open('/proc/self/status'):\n"
+        "        if line.startswith(key):\n"
+        "            return int(line.split()[1]) * 1024\n"
+        f"p = np.random.default_rng(0).uniform(0, 1, ({size}, {size}))\n"
+        f"infer(p[:64, :64], max_iter=2, dtype=np.{dtype})\n"
+        "open('/proc/self/clear_refs', 'w').write('5')\n"
+        "base = status('VmRSS')\n"
+        "tracemalloc.start()\n"
+        f"r = infer(p, max_iter={2 * block}, tol=0.0, dtype=np.{dtype})\n"
+        "arrays = tracemalloc.get_traced_memory()[1]\n"
+        "print(status('VmHWM') - base, arrays)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    rss, arrays = (int(v) for v in out.stdout.strip().splitlines()[-1].split())
+    cells = size * size
+    return record("memory", size, dtype, None, None, peak_bytes=rss, bytes_per_cell=rss / cells,
+                  array_bytes_per_cell=arrays / cells,
+                  note="peak memory infer() adds beyond its float64 input (child process); "
+                  "the result keeps float64 beliefs and the messages")
+
+
+def compile_seconds(cold=True) -> dict:
+    """First-call time of the fast kernels (float32, float64, two threads) in a child process.
+
+    ``cold``: with an empty numba cache (JIT compilation); else with the package's own cache
+    (what every later process pays).
+    """
+    import tempfile
+
+    code = (
+        "import time, numpy as np\n"
+        "from crfmap.crf.lbp import infer\n"
+        "p = np.random.default_rng(0).uniform(0, 1, (600, 600))\n"
+        "t = time.perf_counter()\n"
+        "infer(p[:64, :64], max_iter=3, dtype=np.float32)\n"
+        "infer(p[:64, :64], max_iter=3, dtype=np.float64)\n"
+        "infer(p, max_iter=40, dtype=np.float32, threads=2)\n"
+        "print(time.perf_counter() - t)\n"
+    )
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as cache:
+        if cold:
+            env["NUMBA_CACHE_DIR"] = cache
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+    seconds = float(out.stdout.strip().splitlines()[-1])
+    return record("jit-compile", None, None, None, None, seconds=seconds, cache="empty" if cold else "warm",
+                  note="first calls of infer() in a new process: float32, float64, and the parallel pass")
+
+
+def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
+        external=True):
+    """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI)."""
+    from tqdm.auto import tqdm
+
+    sizes = tuple(sizes or (QUICK_SIZES if quick else SIZES))
+    repeats = repeats or (2 if quick else 5)
+    work = QUICK_WORK if quick else WORK
+    converge_sizes = [s for s in (QUICK_CONVERGE_SIZES if quick else CONVERGE_SIZES) if s <= max(sizes)] or [min(sizes)]
+    tasks = [("machine", None), ("compile", None)]
+    tasks += [("throughput", s) for s in sizes]
+    tasks += [("converge", s) for s in converge_sizes]
+    if memory:
+        tasks.append(("memory", 1024 if quick else max(sizes)))
+    if online:
+        tasks.append(("online", None))
+    if external:
+        tasks.append(("external", None))
+    bar = tqdm(tasks, desc="bench", disable=not progress)
+    for kind, size in bar:
+        bar.set_postfix_str(f"{kind} {size or ''}".strip())
+        if kind == "machine":
+            yield agreement()
+            for th in threads:
+                bw = memory_bandwidth(th, 64 if quick else 256)
+                yield record("memory-bandwidth", None, None, th, None, gbytes_per_second=bw,
+                             bound_mcells_per_second={k: bw * 1e3 / v for k, v in BYTES_PER_CELL_PASS.items()},
+                             note="STREAM-style triad a = b + s c, 3 x 8 bytes per element counted "
+                             "(write-allocate traffic not counted)")
+        elif kind == "compile":
+            if not quick:
+                yield compile_seconds(cold=True)
+            yield compile_seconds(cold=False)
+        elif kind == "throughput":
+            yield bench_baseline(size, repeats)
+            for th in threads:
+                yield bench_fast(size, np.float32, th, repeats, work=work)
+            top = max(threads)
+            yield bench_fast(size, np.float64, top, repeats, work=work)
+            yield bench_fast(size, np.float32, top, repeats, hidden=GENERAL_TABLE, method="crfmap-fast-general",
+                             work=work)
+            yield bench_fast(size, np.float32, top, repeats, bounded=True, method="crfmap-fast-bounded", work=work)
+            yield bench_infer(size, np.float32, top, repeats, work=work)
+            if size <= 512:
+                yield bench_plain(size, 1, top)
+        elif kind == "converge":
+            yield from bench_converge(size, max(threads), with_plain=size <= (256 if quick else 512))
+        elif kind == "memory":
+            yield peak_memory_per_cell(size)
+        elif kind == "online":
+            from crfmap.bench.online import bench_online
+
+            yield from bench_online(quick=quick)
+        elif kind == "external":
+            from crfmap.bench.external import run_external
+
+            yield from run_external([s for s in sizes if s <= EXTERNAL_MAX_SIZE] or [min(sizes)], repeats, quick)
+
+
+def format_record(rec) -> str:
+    """One human-readable line."""
+    parts = [f"{rec['method']:<22}"]
+    for key in ("size", "dtype", "threads"):
+        if rec.get(key) is not None:
+            parts.append(f"{key}={rec[key]}")
+    if rec.get("mcells_per_second") is not None:
+        parts.append(f"{rec['mcells_per_second']:8.1f} Mcell/s")
+    if rec.get("seconds_per_iteration") is not None:
+        parts.append(f"{1e3 * rec['seconds_per_iteration']:.3f} ms/it")
+    for key, value in rec.items():
+        if key in ("method", "size", "dtype", "threads", "mcells_per_second", "seconds_per_iteration"):
+            continue
+        if isinstance(value, float):
+            value = f"{value:.4g}"
+        parts.append(f"{key}={value}")
+    return "  ".join(parts)
+
+
+def to_json(rec) -> str:
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, (np.floating, float)):
+            return None if not math.isfinite(float(v)) else float(v)
+        if isinstance(v, np.integer):
+            return int(v)
+        if isinstance(v, np.bool_):
+            return bool(v)
+        return v
+
+    return json.dumps(clean(rec))
+
+
+def _cpu_name() -> str:  # pragma: no cover - informational
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return os.uname().machine

@@ -1,0 +1,300 @@
+"""Fast checkerboard LBP: odds-ratio messages, red/black planes, temporal blocking (private).
+
+Same schedule and fixed point as :func:`crfmap.crf._lbp_kernels._checkerboard_iteration`
+(cells with (x + y) even send, then the others), laid out for SIMD and for cache:
+
+- **Odds, not probabilities.** A binary message is one odds ratio r = P/(1-P). The cavity odds
+  of a sender are ``R = U * r_a * r_b * r_c`` (U the observation's odds) and the message it
+  sends through a table t (rows receiver, columns sender) is
+  ``r' = (t00 R + t01) / (t10 R + t11)``: three multiplies, two FMAs and one division, where
+  the probability form needs twice the multiplies. The division is the bottleneck (4 per cell).
+- **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`._lbp_kernels`) of
+  the cell in row y with colour c = (x + y) & 1 and x = 2k + ((y + c) & 1). A colour's cells
+  are then contiguous: a half-sweep is a unit-stride loop that vectorises. Row 0 / H + 1 and
+  column 0 / last are ghosts that absorb messages sent off the grid.
+- **Temporal blocking.** One *pass* runs T iterations (2T half-sweeps, "phases") over bands of
+  rows: first every band runs a trapezoid that shrinks by one row per phase at each inner
+  edge (a wavefront inside, so only ~2T + 2 rows are live and stay in cache), then the
+  inverted trapezoids between bands finish. Every (phase, row) is computed exactly once after
+  the three rows it depends on, so a pass equals T plain iterations.
+- **Measured changes.** The largest change of a message in probability,
+  ``|r' - r| / ((1 + r)(1 + r'))``, costs four more divisions, so it is measured only on the
+  iterations asked for (by default the last of each pass).
+
+``act`` (bounded LBP) holds 1 where a cell may send; ``lo_k, hi_k`` bound the plane indices
+of each row's active cells so a small region costs little. The arrays and the Python driver
+live in :mod:`crfmap.crf.packed`.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+FASTMATH = {"nnan", "ninf", "nsz", "contract"}  # no NaN/inf ever occur (floors); lets min/max vectorise
+
+
+# --- one cell, the four messages -------------------------------------------------------------
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _four_unclamped(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3):
+    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S).
+
+    Used as is for tables whose messages cannot leave [lo, hi] (all entries positive).
+    """
+    p = U * r2 * r3
+    q = U * r0 * r1
+    R = p * r0
+    mE = (a0 * R + a1) / (a2 * R + a3)
+    R = p * r1
+    mW = (b0 * R + b1) / (b2 * R + b3)
+    R = q * r2
+    mN = (a0 * R + a1) / (a2 * R + a3)
+    R = q * r3
+    mS = (b0 * R + b1) / (b2 * R + b3)
+    return mE, mW, mN, mS
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _four(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3, lo, hi):
+    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S), kept in [lo, hi]."""
+    mE, mW, mN, mS = _four_unclamped(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3)
+    return (min(max(mE, lo), hi), min(max(mW, lo), hi), min(max(mN, lo), hi), min(max(mS, lo), hi))
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _dp(new, old, one):
+    """|P(new) - P(old)| of two odds."""
+    return abs(new - old) / ((one + old) * (one + new))
+
+
+# --- one row of one colour ---------------------------------------------------------------------
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _send(msg, un, act, use_act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
+    """Cells k0 <= k < k0 + n of colour c in row y send (all have east and west neighbours).
+
+    With ``measure`` the largest change per column is max-accumulated into ``cb[ty]``; ``w_n``,
+    ``w_s`` (1 or 0) drop the north/south message of the top/bottom row, which goes nowhere.
+    Indices are unsigned and arrays are not sliced: both keep the loops vectorised and cheap
+    to enter (rows of a small region are short).
+    """
+    o = 1 - c
+    y1 = y + 1
+    j0 = np.uint64(k0 + 1)  # stored column of cell k0 (column 0 is a ghost)
+    e0 = j0 + np.uint64((y + c) & 1)  # its east neighbour's column in the other plane
+    w0 = e0 - np.uint64(1)  # its west neighbour's
+    a0, a1, a2, a3 = co[0], co[1], co[2], co[3]
+    b0, b1, b2, b3 = co[4], co[5], co[6], co[7]
+    one = co[8]
+    zero = one - one
+    if not use_act and not measure and co[9] == zero:
+        # the hot loop: a table with positive entries never sends a message outside [lo, hi]
+        for i in range(n):
+            ui = np.uint64(i)
+            j = j0 + ui
+            mE, mW, mN, mS = _four_unclamped(un[c, y1, j], msg[c, 0, y1, j], msg[c, 1, y1, j], msg[c, 2, y1, j],
+                                             msg[c, 3, y1, j], a0, a1, a2, a3, b0, b1, b2, b3)
+            msg[o, 0, y1, e0 + ui] = mE
+            msg[o, 1, y1, w0 + ui] = mW
+            msg[o, 2, y1 + 1, j] = mN
+            msg[o, 3, y, j] = mS
+    elif not use_act and not measure:
+        for i in range(n):
+            ui = np.uint64(i)
+            j = j0 + ui
+            mE, mW, mN, mS = _four(un[c, y1, j], msg[c, 0, y1, j], msg[c, 1, y1, j], msg[c, 2, y1, j],
+                                   msg[c, 3, y1, j], a0, a1, a2, a3, b0, b1, b2, b3, lo, hi)
+            msg[o, 0, y1, e0 + ui] = mE
+            msg[o, 1, y1, w0 + ui] = mW
+            msg[o, 2, y1 + 1, j] = mN
+            msg[o, 3, y, j] = mS
+    elif not use_act:
+        for i in range(n):
+            ui = np.uint64(i)
+            j = j0 + ui
+            mE, mW, mN, mS = _four(un[c, y1, j], msg[c, 0, y1, j], msg[c, 1, y1, j], msg[c, 2, y1, j],
+                                   msg[c, 3, y1, j], a0, a1, a2, a3, b0, b1, b2, b3, lo, hi)
+            d = _dp(mE, msg[o, 0, y1, e0 + ui], one)
+            msg[o, 0, y1, e0 + ui] = mE
+            d = max(d, _dp(mW, msg[o, 1, y1, w0 + ui], one))
+            msg[o, 1, y1, w0 + ui] = mW
+            d = max(d, w_n * _dp(mN, msg[o, 2, y1 + 1, j], one))
+            msg[o, 2, y1 + 1, j] = mN
+            d = max(d, w_s * _dp(mS, msg[o, 3, y, j], one))
+            msg[o, 3, y, j] = mS
+            cc = cb[ty, j]
+            cb[ty, j] = cc + max(d - cc, zero)  # max(cc, d) without a masked store (slow on AMD)
+    else:
+        for i in range(n):
+            ui = np.uint64(i)
+            j = j0 + ui
+            mE, mW, mN, mS = _four(un[c, y1, j], msg[c, 0, y1, j], msg[c, 1, y1, j], msg[c, 2, y1, j],
+                                   msg[c, 3, y1, j], a0, a1, a2, a3, b0, b1, b2, b3, lo, hi)
+            on = act[c, y1, j] != 0
+            oE = msg[o, 0, y1, e0 + ui]
+            oW = msg[o, 1, y1, w0 + ui]
+            oN = msg[o, 2, y1 + 1, j]
+            oS = msg[o, 3, y, j]
+            mE = mE if on else oE
+            mW = mW if on else oW
+            mN = mN if on else oN
+            mS = mS if on else oS
+            msg[o, 0, y1, e0 + ui] = mE
+            msg[o, 1, y1, w0 + ui] = mW
+            msg[o, 2, y1 + 1, j] = mN
+            msg[o, 3, y, j] = mS
+            if measure:
+                d = max(max(_dp(mE, oE, one), _dp(mW, oW, one)),
+                        max(w_n * _dp(mN, oN, one), w_s * _dp(mS, oS, one)))
+                cc = cb[ty, j]
+                cb[ty, j] = cc + max(d - cc, zero)
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _cell(msg, un, act, use_act, c, y, k, h, w, co, lo, hi):
+    """One cell sends, whatever neighbours it has (grid edges); returns the largest change."""
+    off = (y + c) & 1
+    x = 2 * k + off
+    o = 1 - c
+    one = co[8]
+    if use_act and act[c, y + 1, k + 1] == 0:
+        return one - one
+    mE, mW, mN, mS = _four(un[c, y + 1, k + 1], msg[c, 0, y + 1, k + 1], msg[c, 1, y + 1, k + 1],
+                           msg[c, 2, y + 1, k + 1], msg[c, 3, y + 1, k + 1],
+                           co[0], co[1], co[2], co[3], co[4], co[5], co[6], co[7], lo, hi)
+    d = one - one
+    if x + 1 < w:
+        d = max(d, _dp(mE, msg[o, 0, y + 1, k + off + 1], one))
+        msg[o, 0, y + 1, k + off + 1] = mE
+    if x > 0:
+        d = max(d, _dp(mW, msg[o, 1, y + 1, k + off], one))
+        msg[o, 1, y + 1, k + off] = mW
+    if y + 1 < h:
+        d = max(d, _dp(mN, msg[o, 2, y + 2, k + 1], one))
+        msg[o, 2, y + 2, k + 1] = mN
+    if y > 0:
+        d = max(d, _dp(mS, msg[o, 3, y, k + 1], one))
+        msg[o, 3, y, k + 1] = mS
+    return d
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty):
+    """Cells k0 <= k < k1 of colour c in row y send; measured changes go to ``cb[ty, k + 1]``."""
+    if k1 <= k0:
+        return
+    one = co[8]
+    if not measure:
+        # messages sent off the grid land in ghost slots nobody reads: no edge cases needed
+        _send(msg, un, act, use_act, c, y, k0, k1 - k0, co, lo, hi, False, one, one, cb, ty)
+        return
+    # measured: the change of a message sent off the grid must not count, so the cells at
+    # x = 0 (no west neighbour) and x = w - 1 (no east neighbour) go one by one
+    off = (y + c) & 1
+    first = 1 if (off == 0 and k0 == 0) else 0
+    last = 1 if 2 * (k1 - 1) + off == w - 1 else 0
+    if first == 1:
+        d = _cell(msg, un, act, use_act, c, y, k0, h, w, co, lo, hi)
+        cb[ty, k0 + 1] = max(cb[ty, k0 + 1], d)
+    if last == 1 and (k1 - 1 > k0 or first == 0):
+        d = _cell(msg, un, act, use_act, c, y, k1 - 1, h, w, co, lo, hi)
+        cb[ty, k1] = max(cb[ty, k1], d)
+    zero = one - one
+    w_n = one if y + 1 < h else zero
+    w_s = one if y > 0 else zero
+    n = k1 - last - (k0 + first)
+    if n > 0:
+        _send(msg, un, act, use_act, c, y, k0 + first, n, co, lo, hi, True, w_n, w_s, cb, ty)
+
+
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb):
+    """Colour c of row y sends: the cells of the row's active segments (one row of a half-sweep)."""
+    ty = y // tile_h
+    off = (y + c) & 1
+    for s in range(nseg[ty]):
+        k0 = max((segs[ty, s, 0] - off + 1) >> 1, lo_k[c, y])
+        k1 = min((segs[ty, s, 1] - off + 1) >> 1, hi_k[c, y])
+        _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty)
+
+
+# --- passes ----------------------------------------------------------------------------------
+# Rows are cut into tiles of tile_h rows; in each row tile, only the cells of the segments
+# segs[ty, :nseg[ty]] (column ranges [x0, x1)) send: the others are frozen. Changes are
+# max-accumulated per column into cb[row tile, :] (threads never share a row tile: band edges
+# are multiples of tile_h) and give the largest change per tile.
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi,
+                    phases, measure_from, cb):
+    """Stage 1 of a pass on rows [y0, y1): phase j covers rows shrunk by j at inner edges.
+
+    Edges at ``ylo`` / ``yhi`` (the first / last row that has senders) do not shrink.
+    Wavefront order: at step s, phase j works on row s - j, so the rows a phase needs were
+    finished by phase j - 1 one step earlier and every live row stays in cache.
+    """
+    for s in range(y0, y1 + phases):
+        for j in range(phases):
+            y = s - j
+            lo_row = y0 + j if y0 > ylo else ylo
+            hi_row = y1 - j if y1 < yhi else yhi
+            if y < lo_row or y >= hi_row:
+                continue
+            _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+                       (j >> 1) >= measure_from, cb)
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edge, ylo, yhi,
+                   phases, measure_from, cb):
+    """Stage 2: the inverted trapezoid around the band edge ``edge``, rows [edge - j, edge + j)."""
+    for j in range(1, phases):
+        for y in range(max(edge - j, ylo), min(edge + j, yhi)):
+            _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+                       (j >> 1) >= measure_from, cb)
+
+
+@njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
+def _pass_parallel(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations,
+                   measure_from, cb):
+    """``iterations`` checkerboard iterations over the bands of rows between ``edges``.
+
+    Rows outside [edges[0], edges[-1]) must hold no sender. Iterations from ``measure_from``
+    on are measured (max-accumulated together into ``cb``).
+    """
+    phases = 2 * iterations
+    nb = edges.shape[0] - 1
+    for b in prange(nb):
+        _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b],
+                        edges[b + 1], edges[0], edges[nb], phases, measure_from, cb)
+    for b in prange(nb - 1):
+        _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b + 1],
+                       edges[0], edges[nb], phases, measure_from, cb)
+    return 0
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _pass_serial(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, ylo, yhi, iterations,
+                 measure_from, cb):
+    """One band, rows [ylo, yhi), of :func:`_pass_parallel` (small jobs: no thread start-up)."""
+    _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, ylo, yhi, ylo, yhi,
+                    2 * iterations, measure_from, cb)
+    return 0
+
+
+@njit(cache=True)
+def _tile_max(cb, tile_w, w, out):
+    """out[ty, tx] = largest change in tile (ty, tx), from the per-column maxima ``cb[ty, :]``."""
+    for ty in range(out.shape[0]):
+        for tx in range(out.shape[1]):
+            k0 = (tx * tile_w) >> 1
+            k1 = min(((tx + 1) * tile_w + 1) >> 1, (w + 1) >> 1)
+            m = 0.0
+            for k in range(k0, k1):
+                v = cb[ty, k + 1]
+                if v > m:
+                    m = v
+            out[ty, tx] = m

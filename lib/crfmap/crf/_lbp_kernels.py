@@ -1,0 +1,244 @@
+"""Numba kernels of loopy belief propagation on a 4-connected binary lattice (private).
+
+Data layout (checked and prepared by :mod:`crfmap.crf.lbp`):
+
+- ``unary[y, x]``: P(occupied) the observed layer tells each hidden cell, floored.
+- ``msg[d, y, x]``: the message arriving at cell (y, x) that travelled in direction d
+  (0 east-bound, i.e. from the west neighbour; 1 west-bound, from the east; 2 north-bound,
+  from the south; 3 south-bound, from the north), stored as P(receiver occupied).
+  A slot with no neighbour behind it stays 0.5 for ever (a uniform message).
+- ``coef[d]``: (oo, oe, oo + eo, oe + ee) of the table used by messages travelling in d.
+- ``active[y, x]``: cells allowed to send (bounded LBP); ``use_active`` False ignores it.
+
+A binary message is one number, so one update is one division:
+``m = (oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)`` with A, B the sender's cavity weights.
+Every kernel returns the largest change of any message it wrote.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(inline="always")
+def _message(u, ma, mb, mc, c0, c1, c2, c3, floor, damping, old):
+    a = u * ma * mb * mc
+    b = (1.0 - u) * (1.0 - ma) * (1.0 - mb) * (1.0 - mc)
+    m = (c0 * a + c1 * b) / (c2 * a + c3 * b)
+    if damping > 0.0:
+        m = (1.0 - damping) * m + damping * old
+    if m < floor:
+        m = floor
+    elif m > 1.0 - floor:
+        m = 1.0 - floor
+    return m
+
+
+@njit(inline="always")
+def _send_all(y, x, unary, src, dst, coef, floor, damping):
+    """Write all four messages cell (y, x) sends (read from ``src``, written to ``dst``); return max change."""
+    h, w = unary.shape
+    u = unary[y, x]
+    m0 = src[0, y, x]
+    m1 = src[1, y, x]
+    m2 = src[2, y, x]
+    m3 = src[3, y, x]
+    change = 0.0
+    if x + 1 < w:
+        old = src[0, y, x + 1]
+        m = _message(u, m0, m2, m3, coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3], floor, damping, old)
+        dst[0, y, x + 1] = m
+        change = max(change, abs(m - old))
+    if x > 0:
+        old = src[1, y, x - 1]
+        m = _message(u, m1, m2, m3, coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3], floor, damping, old)
+        dst[1, y, x - 1] = m
+        change = max(change, abs(m - old))
+    if y + 1 < h:
+        old = src[2, y + 1, x]
+        m = _message(u, m0, m1, m2, coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3], floor, damping, old)
+        dst[2, y + 1, x] = m
+        change = max(change, abs(m - old))
+    if y > 0:
+        old = src[3, y - 1, x]
+        m = _message(u, m0, m1, m3, coef[3, 0], coef[3, 1], coef[3, 2], coef[3, 3], floor, damping, old)
+        dst[3, y - 1, x] = m
+        change = max(change, abs(m - old))
+    return change
+
+
+@njit(parallel=True, cache=True)
+def _checkerboard_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping):
+    """Red cells send, then black cells send (in place; race-free: a half only reads its own slots)."""
+    row_change = np.zeros(y1 - y0)
+    w = unary.shape[1]
+    for parity in range(2):
+        for i in prange(y1 - y0):
+            y = y0 + i
+            c = row_change[i]
+            for x in range((parity + y) & 1, w, 2):
+                if use_active and not active[y, x]:
+                    continue
+                c = max(c, _send_all(y, x, unary, msg, msg, coef, floor, damping))
+            row_change[i] = c
+    return row_change.max() if row_change.size else 0.0
+
+
+@njit(parallel=True, cache=True)
+def _flooding_iteration(unary, msg, new, coef, active, use_active, y0, y1, floor, damping):
+    """Every cell sends from the old messages ``msg`` into ``new`` (synchronous)."""
+    row_change = np.zeros(y1 - y0)
+    w = unary.shape[1]
+    for i in prange(y1 - y0):
+        y = y0 + i
+        c = 0.0
+        for x in range(w):
+            if use_active and not active[y, x]:
+                continue
+            c = max(c, _send_all(y, x, unary, msg, new, coef, floor, damping))
+        row_change[i] = c
+    return row_change.max() if row_change.size else 0.0
+
+
+@njit(parallel=True, cache=True)
+def _sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping):
+    """Four directional sweeps (thesis sec. 2.6.2): east-bound, west-bound, north-bound, south-bound.
+
+    Each sweep updates the messages of one direction in order along it, so information
+    crosses the whole grid in one sweep.
+    """
+    h, w = unary.shape
+    change = np.zeros(max(h, w))
+    # east-bound: column by column, rows in parallel
+    for x in range(w - 1):
+        for i in prange(y1 - y0):
+            y = y0 + i
+            if use_active and not active[y, x]:
+                continue
+            old = msg[0, y, x + 1]
+            m = _message(unary[y, x], msg[0, y, x], msg[2, y, x], msg[3, y, x],
+                         coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3], floor, damping, old)
+            msg[0, y, x + 1] = m
+            change[y] = max(change[y], abs(m - old))
+    # west-bound
+    for x in range(w - 1, 0, -1):
+        for i in prange(y1 - y0):
+            y = y0 + i
+            if use_active and not active[y, x]:
+                continue
+            old = msg[1, y, x - 1]
+            m = _message(unary[y, x], msg[1, y, x], msg[2, y, x], msg[3, y, x],
+                         coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3], floor, damping, old)
+            msg[1, y, x - 1] = m
+            change[y] = max(change[y], abs(m - old))
+    # north-bound: row by row, columns in parallel
+    for y in range(max(y0, 0), min(y1, h - 1)):
+        for x in prange(w):
+            if use_active and not active[y, x]:
+                continue
+            old = msg[2, y + 1, x]
+            m = _message(unary[y, x], msg[0, y, x], msg[1, y, x], msg[2, y, x],
+                         coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3], floor, damping, old)
+            msg[2, y + 1, x] = m
+            change[x] = max(change[x], abs(m - old))
+    # south-bound
+    for y in range(min(y1, h) - 1, max(y0, 1) - 1, -1):
+        for x in prange(w):
+            if use_active and not active[y, x]:
+                continue
+            old = msg[3, y - 1, x]
+            m = _message(unary[y, x], msg[0, y, x], msg[1, y, x], msg[3, y, x],
+                         coef[3, 0], coef[3, 1], coef[3, 2], coef[3, 3], floor, damping, old)
+            msg[3, y - 1, x] = m
+            change[x] = max(change[x], abs(m - old))
+    return change.max()
+
+
+@njit(cache=True)
+def _pull_iteration(unary, msg, coef, active, use_active, order, floor, damping):
+    """The thesis's schedule (Listing 5): visit cells in ``order``; at each, recompute the
+    messages its neighbours send it from their current state, in place."""
+    h, w = unary.shape
+    change = 0.0
+    for k in range(order.shape[0]):
+        idx = order[k]
+        y = idx // w
+        x = idx - y * w
+        # from the west neighbour (travelling east, slot 0 here)
+        if x > 0 and (not use_active or active[y, x - 1]):
+            old = msg[0, y, x]
+            m = _message(unary[y, x - 1], msg[0, y, x - 1], msg[2, y, x - 1], msg[3, y, x - 1],
+                         coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3], floor, damping, old)
+            msg[0, y, x] = m
+            change = max(change, abs(m - old))
+        # from the east neighbour (travelling west, slot 1)
+        if x + 1 < w and (not use_active or active[y, x + 1]):
+            old = msg[1, y, x]
+            m = _message(unary[y, x + 1], msg[1, y, x + 1], msg[2, y, x + 1], msg[3, y, x + 1],
+                         coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3], floor, damping, old)
+            msg[1, y, x] = m
+            change = max(change, abs(m - old))
+        # from the south neighbour (travelling north, slot 2)
+        if y > 0 and (not use_active or active[y - 1, x]):
+            old = msg[2, y, x]
+            m = _message(unary[y - 1, x], msg[0, y - 1, x], msg[1, y - 1, x], msg[2, y - 1, x],
+                         coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3], floor, damping, old)
+            msg[2, y, x] = m
+            change = max(change, abs(m - old))
+        # from the north neighbour (travelling south, slot 3)
+        if y + 1 < h and (not use_active or active[y + 1, x]):
+            old = msg[3, y, x]
+            m = _message(unary[y + 1, x], msg[0, y + 1, x], msg[1, y + 1, x], msg[3, y + 1, x],
+                         coef[3, 0], coef[3, 1], coef[3, 2], coef[3, 3], floor, damping, old)
+            msg[3, y, x] = m
+            change = max(change, abs(m - old))
+    return change
+
+
+@njit(parallel=True, cache=True)
+def _beliefs(unary, msg, out):
+    """P(occupied) of every hidden cell: its observation times its four incoming messages."""
+    h, w = unary.shape
+    for y in prange(h):
+        for x in range(w):
+            u = unary[y, x]
+            a = u * msg[0, y, x] * msg[1, y, x] * msg[2, y, x] * msg[3, y, x]
+            b = (1.0 - u) * (1.0 - msg[0, y, x]) * (1.0 - msg[1, y, x]) * (1.0 - msg[2, y, x]) * (1.0 - msg[3, y, x])
+            out[y, x] = a / (a + b)
+
+
+@njit(cache=True)
+def _bfs_order(h, w, active, use_active, start_y, start_x):
+    """Breadth-first order of cells from a start cell over 4-neighbours (within ``active``)."""
+    seen = np.zeros((h, w), np.bool_)
+    order = np.empty(h * w, np.int64)
+    head = 0
+    tail = 0
+    if use_active and not active[start_y, start_x]:
+        return order[:0]
+    order[tail] = start_y * w + start_x
+    tail += 1
+    seen[start_y, start_x] = True
+    while head < tail:
+        idx = order[head]
+        head += 1
+        y = idx // w
+        x = idx - y * w
+        for k in range(4):
+            ny, nx = y, x
+            if k == 0:
+                nx = x + 1
+            elif k == 1:
+                ny = y + 1
+            elif k == 2:
+                nx = x - 1
+            else:
+                ny = y - 1
+            if ny < 0 or nx < 0 or ny >= h or nx >= w or seen[ny, nx]:
+                continue
+            if use_active and not active[ny, nx]:
+                continue
+            seen[ny, nx] = True
+            order[tail] = ny * w + nx
+            tail += 1
+    return order[:tail]

@@ -1,0 +1,390 @@
+"""Loopy belief propagation on an occupancy grid's CRF (thesis sec. 2.6, 3.3, 3.4).
+
+The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one
+observed node per cell holding the grid's P(occupied), which sends its hidden node one message
+through ``link``. :func:`infer` runs sum-product LBP with normalised messages and returns the
+beliefs P(occupied) as a grid plus the convergence diagnostics.
+
+Schedules:
+
+- ``"checkerboard"`` (default): red cells send, then black cells. Parallel, in place, and in our
+  runs convergent where flooding oscillates.
+- ``"flooding"``: every message from the previous iteration's messages (synchronous). Can
+  oscillate on strong couplings; ``damping`` (0..1, weight of the old message) tames it.
+- ``"sweep"``: four directional sweeps (thesis sec. 2.6.2): information crosses the grid per sweep.
+- ``"thesis"``: breadth-first from a corner cell, each visited cell pulling fresh messages from
+  its neighbours, in place (Listing 5); every iteration restarts from the last cell visited
+  (sec. 2.6.2). ``max_iter=2`` is the thesis's setting.
+
+Kernels: the checkerboard schedule (without damping) runs on the fast kernels of
+:mod:`crfmap.crf._lbp_fast` by default (``kernel="auto"``): messages as odds ratios in red/black
+planes, float32 SIMD, several iterations per trip through memory. They give the plain
+kernel's iterations (to rounding) but measure the largest message change only on the last
+iteration of each block of up to ``block`` iterations (blocks grow 1, 2, 4, ... so a warm
+start still stops at once); the other entries of ``max_change`` are NaN, and a run may do up
+to ``block - 1`` iterations more than the plain kernel before it sees ``tol``. On large grids,
+tiles whose messages stopped moving (by more than ``freeze``, default ``tol / 100``) pause until
+a neighbouring tile moves; a run ends only after an iteration of every cell moved no message by
+``tol``, and ``freeze=0`` pauses only tiles that did not move at all (the plain iterations
+exactly). ``kernel="plain"`` runs the reference kernels of :mod:`crfmap.crf._lbp_kernels`.
+
+Bounded LBP (sec. 3.4.4): pass ``region`` (a boolean [y, x] mask, e.g. from :func:`disc_region`):
+only cells in it send messages; every other message keeps its value (warm-start ``messages``
+to carry them between calls). Cells outside a region never influence anything unless they
+sent messages before.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from crfmap.crf import _lbp_kernels as K
+from crfmap.crf.packed import PackedBlock, fast_tables_ok
+from crfmap.errors import InputError
+from crfmap.crf.regions import disc_region, near_known  # noqa: F401  (re-exported)
+from crfmap.grid import OccupancyGrid, check_probability_array
+from crfmap.crf.potentials import (
+    DEFAULT_HIDDEN,
+    DEFAULT_LINK,
+    check_pairing,
+    check_table,
+    directional_tables,
+    link_unary,
+    message_coefficients,
+)
+
+SCHEDULES = ("checkerboard", "flooding", "sweep", "thesis")
+KERNELS = ("auto", "fast", "plain")
+DEFAULT_BLOCK = 16  # iterations per pass of the fast kernel (temporal blocking depth)
+# Fast kernel: tiles whose messages moved by less than FREEZE * tol stop iterating until a
+# neighbouring tile moves (see crfmap.crf._lbp_fast.PackedBlock.run); convergence is always
+# decided by an iteration of every cell.
+FREEZE = 0.01
+
+# Messages and observations are kept in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR]: products of five
+# factors then stay far above float32's smallest normal (1e-38), hard evidence (P = 0 or 1, or a
+# table with zeros) stays finite, and contradicting hard evidence gives 0.5 rather than 0/0 = NaN.
+MESSAGE_FLOOR = 1e-6
+
+
+@dataclass
+class LBPResult:
+    """What :func:`infer` returns.
+
+    Attributes
+    ----------
+    beliefs : OccupancyGrid
+        P(occupied) of every hidden cell, with the input grid's metadata.
+    iterations : int
+        Iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
+    max_change : ndarray
+        The largest message change at every iteration (length ``iterations``); NaN where the
+        fast kernel did not measure it (it measures the last iteration of each block).
+    converged : bool
+        Whether the last change fell below ``tol``.
+    messages : ndarray
+        The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
+    seconds : float
+        Wall time of the inference (compilation excluded after the first call).
+    kernel : str
+        "fast" or "plain": which kernels ran.
+    """
+
+    beliefs: OccupancyGrid
+    iterations: int
+    max_change: np.ndarray
+    converged: bool
+    messages: np.ndarray = field(repr=False)
+    seconds: float = 0.0
+    schedule: str = "checkerboard"
+    kernel: str = "plain"
+
+    @property
+    def last_change(self) -> float:
+        """The largest message change of the last iteration (NaN if none was done)."""
+        return float(self.max_change[-1]) if len(self.max_change) else float("nan")
+
+    def summary(self) -> str:
+        last = f"{self.max_change[-1]:.2e}" if len(self.max_change) else "n/a"
+        state = "converged" if self.converged else "not converged"
+        return f"{self.schedule}: {self.iterations} iterations, {state} (last max message change {last})"
+
+
+def message(table, sender_p) -> float:
+    """P(receiver occupied) of one message through a 2x2 table from a sender at P(occupied) = sender_p.
+
+    Thesis eq. 1 / Table 1:
+
+    >>> round(message([[0.9, 0.1], [0.1, 0.9]], 0.8), 6)
+    0.74
+    """
+    t = check_table(table, "table")
+    c = message_coefficients(t[None])[0]
+    p = float(sender_p)
+    if not 0.0 <= p <= 1.0:
+        raise InputError("sender_p", f"must be a probability in [0, 1], got {sender_p!r}")
+    return float(K._message(p, 0.5, 0.5, 0.5, c[0], c[1], c[2], c[3], 0.0, 0.0, 0.0))
+
+
+def _as_grid(grid, name="grid") -> OccupancyGrid:
+    if isinstance(grid, OccupancyGrid):
+        return grid
+    return OccupancyGrid(check_probability_array(grid, name))
+
+
+def initial_messages(shape, dtype=np.float64) -> np.ndarray:
+    """Uniform messages (0.5) for a grid of ``shape`` = (H, W)."""
+    return np.full((4,) + tuple(shape), 0.5, dtype=dtype)
+
+
+def infer(
+    grid,
+    hidden=DEFAULT_HIDDEN,
+    link=DEFAULT_LINK,
+    *,
+    schedule: str = "checkerboard",
+    max_iter: int = 1000,
+    tol: float = 1e-5,
+    damping: float = 0.0,
+    region=None,
+    messages=None,
+    pairing: str = "receiver",
+    dtype=np.float64,
+    start: str = "lower-left",
+    threads: int | None = None,
+    kernel: str = "auto",
+    block: int = DEFAULT_BLOCK,
+    freeze: float | None = None,
+) -> LBPResult:
+    """Run loopy belief propagation on a grid's CRF.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid or 2-D array of P(occupied) in [0, 1], indexed [y, x]
+    hidden, link : 2x2 tables (rows C1 C0, columns N1 N0); see :mod:`crfmap.crf.potentials`
+    schedule : "checkerboard", "flooding", "sweep" or "thesis"
+    max_iter : int
+        Stop after this many iterations (the thesis used 2 with ``schedule="thesis"``).
+    tol : float
+        Stop once the largest message change of an iteration is below ``tol``.
+    damping : float in [0, 1)
+        New message = (1 - damping) * update + damping * old.
+    region : boolean [y, x] mask or None
+        Bounded LBP: only these cells send messages.
+    messages : (4, H, W) array or None
+        Warm start (e.g. ``previous_result.messages``); uniform when None.
+    pairing : "receiver" (thesis) or "oriented" (proper pairwise CRF for non-symmetric tables)
+    dtype : np.float64 or np.float32
+    start : "lower-left", "lower-right", "upper-left", "upper-right"
+        Corner where the ``"thesis"`` schedule begins.
+    threads : int or None
+        Numba threads for the parallel schedules (None: numba's default).
+    kernel : "auto", "fast" or "plain"
+        "auto" runs the fast kernels whenever they apply (checkerboard, no damping).
+    block : int
+        Fast kernel: at most this many iterations per trip through memory; the message change
+        is measured on the last iteration of each block.
+    freeze : float or None
+        Fast kernel: tiles (32 x 256 cells) whose messages moved by at most this stop
+        iterating until a neighbouring tile moves; None means ``FREEZE * tol``, 0 freezes only
+        tiles that did not move at all (exactly the plain iterations). The result has always
+        passed an iteration of every cell that moved no message by ``tol``.
+
+    Returns
+    -------
+    LBPResult
+
+    Examples
+    --------
+    >>> r = infer(np.array([[0.9, 0.5, 0.9]]), max_iter=50, tol=1e-9)
+    >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
+    (True, True)
+    """
+    g = _as_grid(grid)
+    if schedule not in SCHEDULES:
+        raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)}, got {schedule!r}")
+    hidden = check_table(hidden, "hidden")
+    link = check_table(link, "link")
+    pairing = check_pairing(pairing)
+    dtype = np.dtype(dtype)
+    if dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
+        raise InputError("dtype", f"must be float32 or float64, got {dtype}")
+    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 0):
+        raise InputError("max_iter", f"must be a non-negative integer, got {max_iter!r}")
+    if not (np.isfinite(tol) and tol >= 0):
+        raise InputError("tol", f"must be a non-negative number, got {tol!r}")
+    if not (0.0 <= damping < 1.0):
+        raise InputError("damping", f"must be in [0, 1), got {damping!r}")
+    if kernel not in KERNELS:
+        raise InputError("kernel", f"must be one of {', '.join(KERNELS)}, got {kernel!r}")
+    if not (isinstance(block, (int, np.integer)) and block >= 1):
+        raise InputError("block", f"must be a positive integer, got {block!r}")
+    if freeze is not None and not (np.isfinite(freeze) and 0 <= freeze and (freeze < tol or freeze == 0)):
+        raise InputError("freeze", f"must be None or a number in [0, tol), got {freeze!r}")
+    if threads is not None and not (isinstance(threads, (int, np.integer)) and threads >= 1):
+        raise InputError("threads", f"must be a positive integer or None, got {threads!r}")
+
+    shape = g.shape
+    tables = directional_tables(hidden, pairing)
+    fast_ok = schedule == "checkerboard" and damping == 0.0 and fast_tables_ok(tables)
+    if kernel == "fast" and not fast_ok:
+        raise InputError("kernel", "the fast kernels run the checkerboard schedule without damping only")
+    use_fast = fast_ok and kernel != "plain"
+    if messages is not None:
+        messages = _check_messages(messages, shape)
+    active = None
+    if region is not None:
+        active = np.asarray(region)
+        if active.shape != shape:
+            raise InputError("region", f"mask shape {active.shape} does not match the grid {shape}")
+        active = active.astype(np.bool_, copy=False)
+
+    import numba
+
+    previous_threads = numba.get_num_threads()
+    n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    numba.set_num_threads(n_threads)
+    try:
+        t0 = time.perf_counter()
+        if use_fast:
+            out = _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, n_threads, block, freeze)
+        else:
+            out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing,
+                               dtype, start)
+        beliefs, msg, changes = out
+        seconds = time.perf_counter() - t0
+    finally:
+        numba.set_num_threads(previous_threads)
+
+    max_change = np.asarray(changes, dtype=np.float64)
+    converged = bool(max_change.size and max_change[-1] < tol)
+    np.clip(beliefs, 0.0, 1.0, out=beliefs)
+    return LBPResult(
+        beliefs=g.with_probability(beliefs),
+        iterations=len(max_change),
+        max_change=max_change,
+        converged=converged,
+        messages=msg,
+        seconds=seconds,
+        schedule=schedule,
+        kernel="fast" if use_fast else "plain",
+    )
+
+
+def _check_messages(messages, shape) -> np.ndarray:
+    msg = np.asarray(messages)
+    if msg.shape != (4,) + tuple(shape):
+        raise InputError("messages", f"expected shape {(4,) + tuple(shape)} for this grid, got {msg.shape}")
+    if not np.issubdtype(msg.dtype, np.floating):
+        msg = msg.astype(np.float64)
+    if not np.all(np.isfinite(msg)) or msg.min() < 0 or msg.max() > 1:
+        raise InputError("messages", "must be finite probabilities in [0, 1]")
+    return msg
+
+
+def run_packed(packed, max_iter, tol, threads, block=DEFAULT_BLOCK, freeze=None, warm=True) -> list:
+    """Run the fast kernel on a :class:`crfmap.crf.packed.PackedBlock` until ``tol`` or ``max_iter``.
+
+    ``freeze`` None means ``FREEZE * tol``; ``warm`` False (uniform start messages) starts with
+    blocks of ``block`` iterations, since such a run never stops after one. Returns the
+    per-iteration largest message changes (NaN where not measured).
+    """
+    if freeze is None:
+        freeze = FREEZE * tol
+    return packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if warm else block)
+
+
+def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze):
+    """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes)."""
+    shape = g.shape
+    prob = np.ascontiguousarray(g.probability, dtype=np.float64)
+    if active is None:
+        packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR)
+        packed.set_unary(prob, link)
+        if messages is not None:
+            packed.set_messages(np.ascontiguousarray(messages))
+        changes = run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
+        beliefs = packed.beliefs()
+        packed.un = None  # free before the messages are unpacked (peak memory)
+        msg = packed.messages(np.empty((4,) + shape, dtype))
+        return beliefs, msg, changes
+    # Bounded: only the bounding box of the region plus a one-cell halo (the receivers) is packed.
+    msg = initial_messages(shape, dtype) if messages is None else _floored(messages, dtype, shape)
+    rows = np.flatnonzero(active.any(axis=1))
+    changes = []
+    if rows.size:
+        cols = np.flatnonzero(active.any(axis=0))
+        y0, y1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, shape[0])
+        x0, x1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, shape[1])
+        packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, MESSAGE_FLOOR)
+        packed.set_unary(prob, link, y0, x0)
+        packed.set_messages(msg, y0, x0)
+        packed.set_mask(active, y0, x0)
+        changes = run_packed(packed, max_iter, tol, threads, block, freeze)
+        packed.messages(msg, y0, x0)
+    else:
+        changes = [0.0] if max_iter > 0 else []
+    unary = np.clip(link_unary(prob, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR)
+    beliefs = np.empty(shape, dtype=np.float64)
+    K._beliefs(unary, msg, beliefs)
+    return beliefs, msg, changes
+
+
+def _floored(messages, dtype, shape):
+    msg = np.clip(messages, MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR).astype(dtype, copy=False)
+    # slots with no neighbour behind them must stay uniform
+    msg[0, :, 0] = msg[1, :, -1] = msg[2, 0, :] = msg[3, -1, :] = 0.5
+    return msg
+
+
+def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing, dtype, start):
+    """The reference kernels of :mod:`crfmap.crf._lbp_kernels`; returns (beliefs, messages, changes)."""
+    shape = g.shape
+    unary = np.clip(link_unary(g.probability, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR).astype(dtype)
+    coef = message_coefficients(directional_tables(hidden, pairing)).astype(dtype)
+    msg = initial_messages(shape, dtype) if messages is None else _floored(messages, dtype, shape)
+    if active is None:
+        active = np.ones((1, 1), dtype=np.bool_)
+        use_active = False
+        y0, y1 = 0, shape[0]
+    else:
+        use_active = True
+        rows = np.flatnonzero(active.any(axis=1))
+        y0, y1 = (int(rows[0]), int(rows[-1]) + 1) if rows.size else (0, 0)
+    floor = float(MESSAGE_FLOOR)
+    damping = float(damping)
+    changes = []
+    if schedule == "flooding":
+        new = msg.copy()
+    if schedule == "thesis":
+        corner = {"lower-left": (0, 0), "lower-right": (0, shape[1] - 1),
+                  "upper-left": (shape[0] - 1, 0), "upper-right": (shape[0] - 1, shape[1] - 1)}
+        if start not in corner:
+            raise InputError("start", f"must be one of {', '.join(corner)}, got {start!r}")
+        sy, sx = corner[start]
+        if use_active and not active[sy, sx]:
+            cells = np.argwhere(active)
+            if cells.size:
+                sy, sx = (int(v) for v in cells[0])
+    for _ in range(max_iter):
+        if schedule == "checkerboard":
+            c = K._checkerboard_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
+        elif schedule == "flooding":
+            c = K._flooding_iteration(unary, msg, new, coef, active, use_active, y0, y1, floor, damping)
+            msg, new = new, msg
+            new[...] = msg  # slots not written this round (inactive senders) keep their values
+        elif schedule == "sweep":
+            c = K._sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
+        else:
+            order = K._bfs_order(shape[0], shape[1], active, use_active, sy, sx)
+            c = K._pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)
+            if order.size:  # the next pass starts where this one ended (sec. 2.6.2)
+                sy, sx = divmod(int(order[-1]), shape[1])
+        changes.append(float(c))
+        if c < tol:
+            break
+    beliefs = np.empty(shape, dtype=np.float64)
+    K._beliefs(unary, msg, beliefs)
+    return beliefs, msg, changes

@@ -1,0 +1,395 @@
+"""The fast kernels' data: red/black odds planes of a block of the grid, and running passes (private).
+
+:class:`PackedBlock` holds the observations and messages of a rectangular block of cells in the
+layout of :mod:`crfmap.crf._lbp_fast` (odds ratios, one plane per colour, ghost rows and columns),
+converts to and from the probability layout of :mod:`crfmap.crf.lbp`, and runs checkerboard
+iterations: temporally blocked passes over bands of rows, and -- on large grids -- only over
+the tiles whose messages still move (:meth:`PackedBlock.run`).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from crfmap.crf._lbp_fast import _pass_parallel, _pass_serial, _tile_max
+
+
+# --- layout conversion -------------------------------------------------------------------------
+
+
+@njit(inline="always", cache=True)
+def unary_odds(p, link, floor):
+    """Odds of the message an observation P(occupied) = p sends through ``link`` (floored).
+
+    ``link`` = (l00, l01, l10, l11); as :func:`crfmap.crf.potentials.link_unary`.
+    """
+    occ = link[0] * p + link[1] * (1.0 - p)
+    emp = link[2] * p + link[3] * (1.0 - p)
+    tot = occ + emp
+    u = occ / tot if tot > 0 else 0.5
+    u = min(max(u, floor), 1.0 - floor)
+    return u / (1.0 - u)
+
+
+@njit(parallel=True, cache=True)
+def _pack_unary(prob, y0, x0, h, w, link, floor, un):
+    """Observation odds of cells [y0, y0 + h) x [x0, x0 + w) of ``prob`` into planes ``un``."""
+    for y in prange(h):
+        for x in range(w):
+            un[(x + y) & 1, y + 1, (x >> 1) + 1] = unary_odds(prob[y0 + y, x0 + x], link, floor)
+
+
+@njit(parallel=True, cache=True)
+def _pack_messages(msg_p, y0, x0, h, w, floor, out):
+    """Probability messages [4, y, x] of the block into odds planes ``out`` (floored).
+
+    A slot with no neighbour behind it in the whole grid stays uniform (odds 1).
+    """
+    grid_h, grid_w = msg_p.shape[1], msg_p.shape[2]
+    for y in prange(h):
+        gy = y0 + y
+        for x in range(w):
+            gx = x0 + x
+            c = (x + y) & 1
+            for d in range(4):
+                m = min(max(msg_p[d, gy, gx], floor), 1.0 - floor)
+                r = m / (1.0 - m)
+                if (d == 0 and gx == 0) or (d == 1 and gx == grid_w - 1) or (d == 2 and gy == 0) or (d == 3 and gy == grid_h - 1):
+                    r = 1.0
+                out[c, d, y + 1, (x >> 1) + 1] = r
+
+
+@njit(parallel=True, cache=True)
+def _unpack_messages(packed, y0, x0, h, w, act, use_act, out):
+    """Odds planes back into probability messages ``out[4, y0 + y, x0 + x]``.
+
+    With ``use_act`` only slots whose sender is an active cell of the block are written (the
+    others did not change, and a round trip through odds would perturb them by rounding).
+    """
+    for y in prange(h):
+        for x in range(w):
+            c = (x + y) & 1
+            for d in range(4):
+                if use_act:
+                    sy = y + (1 if d == 3 else (-1 if d == 2 else 0))
+                    sx = x + (1 if d == 1 else (-1 if d == 0 else 0))
+                    if sy < 0 or sy >= h or sx < 0 or sx >= w or act[(sx + sy) & 1, sy + 1, (sx >> 1) + 1] == 0:
+                        continue
+                r = packed[c, d, y + 1, (x >> 1) + 1]
+                out[d, y0 + y, x0 + x] = r / (1.0 + r)
+
+
+@njit(parallel=True, cache=True)
+def _beliefs_packed(un, packed, h, w, out):
+    """P(occupied) of every cell of the block: observation odds times its four message odds."""
+    for y in prange(h):
+        for x in range(w):
+            c = (x + y) & 1
+            k = (x >> 1) + 1
+            b = float(un[c, y + 1, k])
+            for d in range(4):
+                b *= float(packed[c, d, y + 1, k])
+            out[y, x] = b / (1.0 + b)
+
+
+@njit(cache=True)
+def _active_extents(act, h, w, lo_k, hi_k):
+    """Per colour and row, the plane-index range [lo, hi) holding its active cells."""
+    for c in range(2):
+        for y in range(h):
+            off = (y + c) & 1
+            n = (w - off + 1) >> 1
+            lo = n
+            hi = 0
+            for k in range(n):
+                if act[c, y + 1, k + 1] != 0:
+                    if k < lo:
+                        lo = k
+                    hi = k + 1
+            lo_k[c, y] = lo if hi > 0 else 0
+            hi_k[c, y] = hi
+
+
+@njit(parallel=True, cache=True)
+def _pack_mask(mask, y0, x0, h, w, out):
+    for y in prange(h):
+        for x in range(w):
+            out[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if mask[y0 + y, x0 + x] else 0
+
+
+# --- the Python side: a packed block and its passes ------------------------------------------
+
+SERIAL_CELLS = 1 << 15  # blocks smaller than this run on one thread (no thread start-up per pass)
+TILE_ROWS = 16  # [cells] tiles for measuring changes and freezing settled parts of the grid
+TILE_COLS = 64  # [cells]
+SPARSE_FRACTION = 0.5  # iterate tile by tile once fewer tiles than this still move
+SPARSE_CELLS = 1 << 18  # grids with fewer senders never freeze tiles
+
+
+def odds_coefficients(tables, dtype, floor) -> np.ndarray:
+    """(E/N table, W/S table) entries t00 t01 t10 t11, 1, and whether messages need the floor.
+
+    ``tables`` are the four directional tables (rows receiver); east and north must share one,
+    west and south the other (true of both pairings). Scaled so the largest entry is 1. A
+    message through t has odds between t01/t11 and t00/t10; when both lie well inside the
+    floored range the clamp can never act and the hot loop skips it (co[9] = 0).
+    """
+    tables = np.asarray(tables, dtype=np.float64)
+    scale = tables.max()
+    clamp = 0.0
+    lo, hi = floor / (1.0 - floor), (1.0 - floor) / floor
+    for t in (tables[0], tables[1]):
+        if np.any(t <= 0):
+            clamp = 1.0
+        else:
+            ends = (t[0, 1] / t[1, 1], t[0, 0] / t[1, 0])
+            if min(ends) < 10.0 * lo or max(ends) > hi / 10.0:
+                clamp = 1.0
+    co = np.concatenate([tables[0].ravel() / scale, tables[1].ravel() / scale, [1.0, clamp]])
+    return co.astype(dtype)
+
+
+def fast_tables_ok(tables) -> bool:
+    """Whether the fast kernels can run these directional tables (E = N and W = S)."""
+    tables = np.asarray(tables)
+    return bool(np.array_equal(tables[0], tables[2]) and np.array_equal(tables[1], tables[3]))
+
+
+def plane_width(w) -> int:
+    return (w + 1) // 2 + 2
+
+
+def full_extents(h, w):
+    """Plane-index ranges covering every cell of every row: lo = 0, hi = cells of that colour."""
+    y = np.arange(h)
+    lo = np.zeros((2, h), np.int64)
+    hi = np.stack([(w - ((y + c) & 1) + 1) >> 1 for c in (0, 1)]).astype(np.int64)
+    return lo, hi
+
+
+class PackedBlock:
+    """Odds messages and observations of a block of ``h x w`` cells in red/black planes.
+
+    Parameters
+    ----------
+    h, w : int
+    dtype : np.float32 or np.float64
+    tables : (4, 2, 2) directional tables (rows receiver)
+    floor : float, the message floor in probability
+    """
+
+    def __init__(self, h, w, dtype, tables, floor):
+        self.h, self.w = int(h), int(w)
+        self.dtype = np.dtype(dtype)
+        wp = plane_width(self.w)
+        self.msg = np.ones((2, 4, self.h + 2, wp), self.dtype)
+        self.un = np.ones((2, self.h + 2, wp), self.dtype)
+        self.co = odds_coefficients(tables, self.dtype, floor)
+        self.floor = float(floor)
+        self.lo = self.dtype.type(floor / (1.0 - floor))
+        self.hi = self.dtype.type((1.0 - floor) / floor)
+        self.act = np.zeros((2, 1, 1), np.uint8)
+        self.use_act = False
+        self.lo_k, self.hi_k = full_extents(self.h, self.w)
+        self._extents_changed()
+        self.cell_updates = 0  # cells that sent, summed over iterations (work done)
+
+    # --- filling it ---------------------------------------------------------------------------
+    def set_unary(self, probability, link, y0=0, x0=0):
+        """Observation odds from P(occupied) ``probability[y0:y0+h, x0:x0+w]`` through ``link``."""
+        link = np.asarray(link, np.float64).ravel()
+        _pack_unary(probability, y0, x0, self.h, self.w, link, self.floor, self.un)
+
+    def set_messages(self, messages, y0=0, x0=0):
+        """Probability messages ``messages[4, y0:y0+h, x0:x0+w]`` (None: uniform)."""
+        if messages is None:
+            self.msg.fill(1.0)
+        else:
+            _pack_messages(messages, y0, x0, self.h, self.w, self.floor, self.msg)
+
+    def set_mask(self, mask, y0=0, x0=0):
+        """Only cells with ``mask[y0 + y, x0 + x]`` send (None: all)."""
+        if mask is None:
+            self.act = np.zeros((2, 1, 1), np.uint8)
+            self.use_act = False
+            self.lo_k, self.hi_k = full_extents(self.h, self.w)
+            self._extents_changed()
+            return
+        self.act = np.zeros((2, self.h + 2, plane_width(self.w)), np.uint8)
+        _pack_mask(mask, y0, x0, self.h, self.w, self.act)
+        self.use_act = True
+        self.lo_k = np.zeros((2, self.h), np.int64)
+        self.hi_k = np.zeros((2, self.h), np.int64)
+        _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
+        self._extents_changed()
+
+    def set_packed_mask(self, act):
+        """Only cells whose entry of ``act`` (red/black planes, shape of ``un``) is non-zero send.
+
+        ``act`` is used as is, not copied: its owner may keep updating it between passes.
+        """
+        self.act = act
+        self.use_act = True
+        self.lo_k = np.zeros((2, self.h), np.int64)
+        self.hi_k = np.zeros((2, self.h), np.int64)
+        _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
+        self._extents_changed()
+
+    def set_rows(self, y0, x_from, x_to, act=None):
+        """Only cells x_from[i] <= x < x_to[i] of row y0 + i send (e.g. a disc).
+
+        With ``act`` (red/black planes as in :meth:`set_packed_mask`), only those among them
+        whose entry is non-zero; ``active_cells`` then counts the whole rows' ranges.
+        """
+        self.act = np.zeros((2, 1, 1), np.uint8) if act is None else act
+        self.use_act = act is not None
+        self.lo_k = np.zeros((2, self.h), np.int64)
+        self.hi_k = np.zeros((2, self.h), np.int64)
+        rows = y0 + np.arange(len(x_from))
+        for c in (0, 1):
+            off = (rows + c) & 1
+            self.lo_k[c, rows] = (np.asarray(x_from) - off + 1) >> 1
+            self.hi_k[c, rows] = np.maximum((np.asarray(x_to) - off + 1) >> 1, self.lo_k[c, rows])
+        self._extents_changed()
+
+    def _extents_changed(self):
+        counts = (self.hi_k - self.lo_k).clip(0)
+        rows = np.flatnonzero(counts.sum(axis=0) > 0)
+        self.row_range = (int(rows[0]), int(rows[-1]) + 1) if rows.size else (0, 0)
+        self.active_cells = int(counts.sum())
+
+    # --- reading it ---------------------------------------------------------------------------
+    def messages(self, out, y0=0, x0=0):
+        """Write the probability messages into ``out[4, y0:y0+h, x0:x0+w]``."""
+        _unpack_messages(self.msg, y0, x0, self.h, self.w, self.act, self.use_act, out)
+        return out
+
+    def beliefs(self, out=None):
+        out = np.empty((self.h, self.w), np.float64) if out is None else out
+        _beliefs_packed(self.un, self.msg, self.h, self.w, out)
+        return out
+
+    # --- running it -----------------------------------------------------------------------------
+    def band_edges(self, iterations, threads):
+        """Row edges of the bands a pass of ``iterations`` uses (one band: run serially).
+
+        Inner edges are multiples of TILE_ROWS and bands are tall enough that neither two
+        gap trapezoids nor two threads ever share a row tile.
+        """
+        ylo, yhi = self.row_range
+        rows = yhi - ylo
+        min_height = 4 * iterations + 2 * TILE_ROWS + 4
+        if threads <= 1 or self.active_cells < SERIAL_CELLS or rows < 2 * min_height:
+            return np.array([ylo, yhi], np.int64)
+        # two bands per thread: edge bands (which shrink on one side only) pair with inner ones
+        nb = 2 * threads if rows >= 2 * threads * min_height else threads
+        inner = np.linspace(ylo, yhi, nb + 1)[1:-1]
+        inner = (np.round(inner / TILE_ROWS) * TILE_ROWS).astype(np.int64)
+        edges = np.concatenate([[ylo], inner, [yhi]]).astype(np.int64)
+        if np.any(np.diff(edges) < min_height):
+            return np.array([ylo, yhi], np.int64)
+        return edges
+
+    def tile_shape(self):
+        return ((self.h + TILE_ROWS - 1) // TILE_ROWS, (self.w + TILE_COLS - 1) // TILE_COLS)
+
+    def _segments(self, active):
+        """Column ranges of the runs of active tiles in each row tile (all tiles if None)."""
+        n_ty, n_tx = self.tile_shape()
+        if active is None:
+            if getattr(self, "_all_segments", None) is None or self._all_segments[0].shape[0] != n_ty:
+                segs = np.zeros((n_ty, 1, 2), np.int64)
+                segs[:, 0, 1] = self.w
+                self._all_segments = (segs, np.ones(n_ty, np.int64), self.h * self.w)
+            return self._all_segments
+        segs = np.zeros((n_ty, (n_tx + 1) // 2, 2), np.int64)
+        nseg = np.zeros(n_ty, np.int64)
+        padded = np.zeros((n_ty, n_tx + 2), bool)
+        padded[:, 1:-1] = active
+        starts = np.argwhere(padded[:, 1:-1] & ~padded[:, :-2])
+        ends = np.argwhere(padded[:, 1:-1] & ~padded[:, 2:])
+        cells = 0
+        for (ty, t0), (_, t1) in zip(starts, ends):  # argwhere is row-major: runs pair up
+            x0, x1 = t0 * TILE_COLS, min((t1 + 1) * TILE_COLS, self.w)
+            segs[ty, nseg[ty]] = (x0, x1)
+            nseg[ty] += 1
+            cells += (min((ty + 1) * TILE_ROWS, self.h) - ty * TILE_ROWS) * (x1 - x0)
+        return segs, nseg, cells
+
+    def run_pass(self, iterations, threads, measure=True, active=None, per_tile=True):
+        """``iterations`` checkerboard iterations; only the tiles in ``active`` send (None: all).
+
+        Returns the largest message change of the last iteration (NaN if not ``measure``) and,
+        with ``per_tile``, the largest change per tile in it (else None).
+        """
+        edges = self.band_edges(iterations, threads)
+        segs, nseg, cells = self._segments(active)
+        n_ty, n_tx = self.tile_shape()
+        cb = np.zeros((n_ty, self.msg.shape[3]), self.dtype)
+        measure_from = iterations - 1 if measure else iterations
+        args = (self.msg, self.un, self.act, self.use_act, self.lo_k, self.hi_k, segs, nseg, TILE_ROWS,
+                self.h, self.w, self.co, self.lo, self.hi)
+        if len(edges) == 2:
+            _pass_serial(*args, int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb)
+        else:
+            _pass_parallel(*args, edges, int(iterations), int(measure_from), cb)
+        if active is None:
+            cells = self.active_cells
+        self.cell_updates += cells * iterations
+        if not measure:
+            return float("nan"), None
+        if not per_tile:
+            return float(cb.max()), None
+        tiles = np.zeros((n_ty, n_tx))
+        _tile_max(cb, TILE_COLS, self.w, tiles)
+        return float(tiles.max()) if tiles.size else 0.0, tiles
+
+    def run(self, max_iter, tol, threads, block=16, freeze=None, first=1):
+        """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
+
+        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
+        its last (start at 1 after a warm start, which may stop at once; at ``block`` from
+        uniform messages, which never do). With ``freeze``
+        (a change smaller than ``tol``): once fewer than SPARSE_FRACTION of the tiles moved by
+        more than ``freeze`` in a measured iteration, only those tiles and their four
+        neighbours iterate in the next pass; the others ("frozen") keep their messages, which
+        last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one
+        iteration of every cell decides. ``freeze=0`` freezes only tiles that did not move at
+        all, which changes nothing.
+
+        Returns the list of per-iteration largest changes (NaN where not measured, and for the
+        last one if max_iter ends the run before a whole-grid iteration confirmed a settled one).
+        """
+        changes = []
+        size = max(1, int(first))
+        # freezing tiles pays only on grids of many tiles
+        sparse = freeze is not None and (freeze < tol or freeze == 0) and self.active_cells >= SPARSE_CELLS
+        active = None
+        while len(changes) < max_iter:
+            n = min(size, block, max_iter - len(changes))
+            change, per_tile = self.run_pass(n, threads, measure=True, active=active, per_tile=sparse)
+            changes.extend([float("nan")] * (n - 1) + [change])
+            whole_grid = active is None
+            size *= 2
+            if change < tol:
+                if active is None:
+                    break  # an iteration of every cell moved no message by tol
+                active, size = None, 1  # the moving tiles settled: one full iteration decides
+                continue
+            if sparse:
+                moving = per_tile > freeze
+                active = _dilate(moving) if moving.mean() < SPARSE_FRACTION else None
+        if changes and not whole_grid and changes[-1] < tol:
+            # max_iter ran out before an iteration of every cell confirmed the settled tiles
+            changes[-1] = float("nan")
+        return changes
+
+
+def _dilate(mask):
+    """The mask grown by one tile in the four directions."""
+    out = mask.copy()
+    out[1:] |= mask[:-1]
+    out[:-1] |= mask[1:]
+    out[:, 1:] |= mask[:, :-1]
+    out[:, :-1] |= mask[:, 1:]
+    return out

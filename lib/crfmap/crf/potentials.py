@@ -1,0 +1,129 @@
+"""The CRF's two 2x2 potential tables, in the thesis's layout, and how they are checked.
+
+Layout (thesis Tables 4, 5, 7): rows are the state of the cell C that a message arrives at
+(C1 = occupied, C0 = empty), columns the state of the neighbour N it comes from (N1, N0)::
+
+            N1   N0
+    C1  [[ oo,  oe ],
+    C0   [ eo,  ee ]]
+
+- ``hidden``: cell-cell potential of the hidden lattice (default [[10, 1], [1, 10]]).
+- ``link``: observation-cell potential (default identity [[1, 0], [0, 1]]); the observed node
+  holds the grid's P(occupied) and sends one message through it.
+
+A table matters only up to scale: [[10, 1], [1, 10]] and [[0.9, 0.1], [0.1, 0.9]]-style tables
+differ in strength (ratio 10 vs 9), not in kind. Any finite non-negative table with no
+all-zero row is accepted.
+
+Pairing (how a hidden table applies to an undirected lattice edge):
+
+- ``"receiver"`` (the thesis, eq. 9): every message uses the table with rows = receiving cell.
+  For a symmetric table this is exactly sum-product on the pairwise CRF with edge potential
+  ``hidden``; for a non-symmetric one (such as the thesis's learned tables) it is the thesis's
+  directed-influence model, which has no joint distribution to compare against.
+- ``"oriented"``: a proper pairwise CRF whose edge potential is ``psi(x_a, x_b) = hidden[x_a, x_b]``
+  with ``a`` the west (lower x) or south (lower y) cell of the edge. Same as ``"receiver"`` for
+  symmetric tables.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from crfmap.errors import InputError
+
+DEFAULT_HIDDEN = np.array([[10.0, 1.0], [1.0, 10.0]])
+DEFAULT_LINK = np.array([[1.0, 0.0], [0.0, 1.0]])
+PAIRINGS = ("receiver", "oriented")
+
+# Message directions, indexed as the kernels store them: the message a cell sends to its
+# east neighbour arrives there "from the west" and is kept in slot 0, and so on.
+TO_EAST, TO_WEST, TO_NORTH, TO_SOUTH = 0, 1, 2, 3
+
+
+def check_table(table, name="potential") -> np.ndarray:
+    """Return a potential as a (2, 2) float64 array, or raise :class:`InputError`.
+
+    Accepts a nested list, an array, or a string "oo,oe,eo,ee".
+
+    >>> check_table("10,1,1,10").tolist()
+    [[10.0, 1.0], [1.0, 10.0]]
+    """
+    if isinstance(table, str):
+        parts = [p.strip() for p in table.replace(";", ",").split(",") if p.strip()]
+        if len(parts) != 4:
+            raise InputError(name, f"expected 4 comma-separated numbers oo,oe,eo,ee, got {table!r}")
+        try:
+            table = [float(p) for p in parts]
+        except ValueError:
+            raise InputError(name, f"expected 4 numbers oo,oe,eo,ee, got {table!r}") from None
+    try:
+        arr = np.array(table, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(name, f"expected a 2x2 table of numbers, got {table!r}") from None
+    if arr.size == 4:
+        arr = arr.reshape(2, 2)
+    if arr.shape != (2, 2):
+        raise InputError(name, f"expected a 2x2 table, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(name, f"entries must be finite, got {arr.tolist()}")
+    if np.any(arr < 0):
+        raise InputError(name, f"entries must be non-negative, got {arr.tolist()}")
+    for row, label in zip(arr, ("C1 (occupied)", "C0 (empty)")):
+        if not np.any(row > 0):
+            raise InputError(name, f"row {label} is all zero: that state could never occur")
+    return arr
+
+
+def check_pairing(pairing) -> str:
+    if pairing not in PAIRINGS:
+        raise InputError("pairing", f"must be one of {', '.join(PAIRINGS)}, got {pairing!r}")
+    return pairing
+
+
+def is_symmetric(table) -> bool:
+    t = np.asarray(table, dtype=np.float64)
+    return bool(t[0, 1] == t[1, 0])
+
+
+def directional_tables(hidden, pairing="receiver") -> np.ndarray:
+    """The table each message direction uses, rows = receiver, columns = sender: shape (4, 2, 2).
+
+    Indexed by TO_EAST, TO_WEST, TO_NORTH, TO_SOUTH. Under ``"oriented"`` the edge potential
+    ``hidden[x_west, x_east]`` reads as ``hidden.T`` for messages travelling east or north.
+    """
+    t = check_table(hidden, "hidden")
+    check_pairing(pairing)
+    if pairing == "receiver":
+        return np.stack([t, t, t, t])
+    return np.stack([t.T, t, t.T, t])
+
+
+def message_coefficients(tables) -> np.ndarray:
+    """Per direction, the four numbers of the one-division message update (shape (4, 4)).
+
+    With cavity weights A (occupied) and B (empty) at the sender, the normalised message
+    P(receiver occupied) is ``(oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)``.
+    """
+    tables = np.asarray(tables, dtype=np.float64)
+    oo, oe, eo, ee = tables[:, 0, 0], tables[:, 0, 1], tables[:, 1, 0], tables[:, 1, 1]
+    return np.stack([oo, oe, oo + eo, oe + ee], axis=1)
+
+
+def link_unary(observed, link) -> np.ndarray:
+    """P(occupied) that each observed node's message tells its hidden cell (before flooring).
+
+    The message is ``phi(c) = sum_o link[c, o] * P(o)`` with ``P(o = occupied) = observed``;
+    normalised to its occupied share. An observation the link table calls impossible under both
+    states (phi = 0 for both) carries no information and gives 0.5.
+
+    >>> link_unary(np.array([[0.8]]), DEFAULT_LINK).tolist()
+    [[0.8]]
+    """
+    link = check_table(link, "link")
+    p = np.asarray(observed, dtype=np.float64)
+    occ = link[0, 0] * p + link[0, 1] * (1.0 - p)
+    emp = link[1, 0] * p + link[1, 1] * (1.0 - p)
+    total = occ + emp
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = np.where(total > 0, occ / np.where(total > 0, total, 1.0), 0.5)
+    return u

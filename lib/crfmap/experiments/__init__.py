@@ -1,0 +1,41 @@
+"""The thesis's experiments as functions the notebooks call: the scan -> grid -> LBP -> score pipeline, the explorer, the background chapter.
+
+Public API (imported on first use, so ``import crfmap.experiments`` stays cheap):
+
+- :mod:`crfmap.experiments.pipeline`: ``scan_scene``, ``evaluate_pipeline``, ``train_and_test``, ``search_tables``, ``PipelineResult``, ``TrainTest``
+- :mod:`crfmap.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``
+- :mod:`crfmap.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
+"""
+from __future__ import annotations
+
+import importlib
+
+_API = {
+    "scan_scene": "pipeline",
+    "evaluate_pipeline": "pipeline",
+    "train_and_test": "pipeline",
+    "search_tables": "pipeline",
+    "PipelineResult": "pipeline",
+    "TrainTest": "pipeline",
+    "explore": "explorer",
+    "observe": "explorer",
+    "run": "explorer",
+    "draw": "explorer",
+    "gibbs_ising": "background",
+    "ising_exact": "background",
+    "ising_energy": "background",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -1,0 +1,229 @@
+"""What the interactive explorer (notebook 08) computes and draws, as plain functions.
+
+One call runs one setting end to end: make a scene, observe it (image noise on the X, or a
+simulated robot with range noise elsewhere), run LBP with the chosen tables, schedule, number of
+iterations and bound, and draw truth / before / after / ROC. The notebook wires widgets to
+:func:`explore`; nothing here waits for input, so it runs headless too.
+
+- :func:`observe`: the scene's truth and its observed grid (cached: moving a table slider does
+  not re-simulate the robot).
+- :func:`run`: LBP on the observation, with the metrics before and after.
+- :func:`draw` / :func:`explore`: the figure (a :class:`matplotlib.figure.Figure`, not a pyplot
+  one, so a widget redrawing it many times leaks nothing).
+
+>>> ex = run("x", noise=0.42, seed=0)
+>>> bool(ex.after.mse < ex.before.mse)
+True
+"""
+from __future__ import annotations
+
+import io
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
+from crfmap.crf.lbp import SCHEDULES, LBPResult, disc_region, infer
+from crfmap.assess.metrics import Report, auc, evaluate, roc_curve
+from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
+
+EXPLORER_SCENES = ("x", "occluded-train", "occluded-test", "enclosed-train", "enclosed-test",
+                   "hollow-train", "hollow-test", "office")
+DEFAULT_NOISE = 0.42  # sigma of the X image's Gaussian noise: a noisy MSE near the thesis's 0.0825
+OFFICE_SIZE = (8.0, 6.0)  # [m] width, height of the explorer's office: small enough to redraw live
+OFFICE_RESOLUTION = 0.1  # [m/cell]
+TO_CONVERGENCE = 1000  # iterations cap when "to convergence" is asked for
+TOLERANCE = 1e-5  # largest message change that counts as converged
+
+
+@dataclass
+class Observation:
+    """A scene's truth and what the robot (or the noisy scan) made of it."""
+
+    scene: object  # crfmap.world.scenes.Scene
+    observed: OccupancyGrid
+    noise: float
+    noise_kind: str  # "image sigma" (the X) or "range C [m]" (simulated scenes)
+    seed: int
+
+
+@dataclass
+class Exploration:
+    """One run of the explorer: the observation, LBP's result and the metrics before and after."""
+
+    observation: Observation
+    result: LBPResult
+    before: Report
+    after: Report
+    region: np.ndarray | None
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def truth(self) -> OccupancyGrid:
+        return self.observation.scene.truth
+
+
+def _check_scene(scene):
+    if scene not in EXPLORER_SCENES:
+        raise InputError("scene", f"must be one of {', '.join(EXPLORER_SCENES)}, got {scene!r}")
+    return scene
+
+
+def _check_noise(noise):
+    if isinstance(noise, bool) or not isinstance(noise, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(noise) or noise < 0:
+        raise InputError("noise", f"must be a non-negative number, got {noise!r}")
+    return float(noise)
+
+
+def _check_seed(seed):
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError("seed", f"must be a non-negative integer, got {seed!r}")
+    return int(seed)
+
+
+@lru_cache(maxsize=32)
+def _observe(scene, noise, seed):
+    from crfmap.world import scenes
+
+    if scene == "x":
+        made = scenes.x_image()
+        return Observation(made, scenes.noisy_image(made.truth, noise, seed=seed), noise, "image sigma", seed)
+    from crfmap.mapping.builder import build_grid
+    from crfmap.sim.simulator import simulate
+
+    if scene == "office":
+        made = scenes.office_floor(*OFFICE_SIZE, resolution=OFFICE_RESOLUTION, seed=seed)
+    else:
+        made = scenes.make_scene(scene)
+    truth = made.truth
+    ox, oy, _ = truth.origin
+    extent = (ox, oy, ox + truth.width * truth.resolution, oy + truth.height * truth.resolution)
+    recording = simulate(made, seed=seed, range_noise=noise, progress=False)
+    observed = build_grid(recording.scans, truth.resolution, extent=extent)
+    return Observation(made, observed, noise, "range C [m]", seed)
+
+
+def observe(scene="x", noise=DEFAULT_NOISE, seed=0) -> Observation:
+    """The truth of ``scene`` and its observed grid.
+
+    ``"x"``: the UGM X with Gaussian image noise of sigma ``noise`` (:func:`crfmap.world.scenes.noisy_image`).
+    Every other scene: the robot simulated in the scene's default mode with range noise
+    ``+-C``, C ~ U[0, ``noise``] [m], and the thesis's arctan grid built over the truth's extent.
+    ``"office"`` is an 8 m x 6 m floor at 0.1 m whose layout is drawn from ``seed``.
+    Results are cached (treat them as read-only).
+
+    >>> ob = observe("enclosed-train", noise=0.0)
+    >>> ob.observed.shape == ob.scene.truth.shape, bool((ob.observed.probability == 0.5).any())
+    (True, True)
+    """
+    return _observe(_check_scene(scene), _check_noise(noise), _check_seed(seed))
+
+
+def _check_iterations(iterations):
+    if iterations is None:
+        return TO_CONVERGENCE
+    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
+        raise InputError("iterations", f"must be a non-negative integer or None (to convergence), got {iterations!r}")
+    return int(iterations)
+
+
+def _check_radius(radius):
+    if radius is None:
+        return None
+    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(radius) or radius <= 0:
+        raise InputError("radius", f"must be a positive number of metres or None (unbounded), got {radius!r}")
+    return float(radius)
+
+
+def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",
+        iterations=None, radius=None, seed=0) -> Exploration:
+    """Observe ``scene`` and run LBP on it with these settings.
+
+    Parameters
+    ----------
+    scene : one of :data:`EXPLORER_SCENES`
+    noise : image sigma (``"x"``) or range noise bound C [m] (other scenes)
+    hidden, link : 2x2 tables (rows C1 C0, columns N1 N0)
+    schedule : one of :data:`crfmap.crf.lbp.SCHEDULES`
+    iterations : int, or None to run to convergence (max message change < 1e-5)
+    radius : None, or bounded LBP (sec. 3.4.4): only cells within ``radius`` [m] of the robot's
+        start send messages
+    seed : int, noise (and office layout) seed
+
+    Returns
+    -------
+    Exploration
+    """
+    ob = observe(scene, noise, seed)
+    hidden = check_table(hidden, "hidden")
+    link = check_table(link, "link")
+    if schedule not in SCHEDULES:
+        raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)}, got {schedule!r}")
+    max_iter = _check_iterations(iterations)
+    radius = _check_radius(radius)
+    region = None if radius is None else disc_region(ob.observed, ob.scene.start[:2], radius)
+    result = infer(ob.observed, hidden, link, schedule=schedule, max_iter=max_iter, tol=TOLERANCE, region=region)
+    truth = ob.scene.truth
+    settings = {"scene": scene, "noise": ob.noise, "noise_kind": ob.noise_kind, "hidden": hidden.tolist(),
+                "link": link.tolist(), "schedule": schedule, "iterations": iterations, "radius": radius, "seed": seed}
+    return Exploration(ob, result, evaluate(ob.observed, truth), evaluate(result.beliefs, truth), region, settings)
+
+
+def _fmt(table):
+    return "[" + ", ".join(f"{v:g}" for v in np.asarray(table).ravel()) + "]"
+
+
+def draw(ex: Exploration):
+    """Truth, observed grid, grid after LBP (bound outlined) and both ROC curves, in one figure."""
+    from matplotlib.figure import Figure
+
+    from crfmap.plotting import plot_roc, show_grid
+
+    fig = Figure(figsize=(17, 4.4), layout="constrained")
+    axes = fig.subplots(1, 4, gridspec_kw={"width_ratios": [1, 1, 1, 1.05]})
+    truth = ex.truth
+    s = ex.settings
+    show_grid(axes[0], truth, f"truth: {s['scene']}")
+    show_grid(axes[1], ex.observation.observed,
+              f"before LBP ({ex.observation.noise_kind} {ex.observation.noise:g})\nMSE {ex.before.mse:.4f}")
+    show_grid(axes[2], ex.result.beliefs,
+              f"after LBP: {ex.result.iterations} it., {'converged' if ex.result.converged else 'not converged'}"
+              f"\nMSE {ex.after.mse:.4f}")
+    if ex.region is not None:
+        axes[2].contour(ex.region.astype(float), levels=[0.5], colors="tab:red", linewidths=1.0,
+                        extent=truth.extent(), origin="lower")
+        sx, sy = ex.observation.scene.start[:2]
+        axes[2].plot([sx], [sy], marker="o", color="tab:red", markersize=4)
+    curves = {}
+    for label, grid in (("before", ex.observation.observed), ("after", ex.result.beliefs)):
+        fpr, tpr, _ = roc_curve(grid, truth)
+        curves[label] = (fpr, tpr, auc(grid, truth))
+    plot_roc(axes[3], curves, title="ROC (occupied = positive)")
+    bound = "unbounded" if s["radius"] is None else f"radius {s['radius']:g} m"
+    fig.suptitle(f"hidden {_fmt(s['hidden'])}, link {_fmt(s['link'])}, {s['schedule']}, "
+                 f"{'to convergence' if s['iterations'] is None else str(s['iterations']) + ' iterations'}, "
+                 f"{bound}, seed {s['seed']}", fontsize="medium")
+    return fig
+
+
+def explore(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",
+            iterations=None, radius=None, seed=0):
+    """:func:`run` then :func:`draw`: the explorer's figure for one setting.
+
+    >>> fig = explore("x", iterations=2, schedule="thesis")
+    >>> len(fig.axes)
+    4
+    """
+    return draw(run(scene, noise, hidden, link, schedule, iterations, radius, seed))
+
+
+def to_png(fig, dpi: int = 90) -> bytes:
+    """The figure as PNG bytes (for ``IPython.display.Image``, whatever matplotlib backend is active)."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=dpi)
+    return buffer.getvalue()

@@ -1,0 +1,46 @@
+"""Files in and out: ROS 1/2 bags, CARMEN logs, map_server maps, exact .npy grids, atomic writes.
+
+Public API (imported on first use, so ``import crfmap.io`` stays cheap):
+
+- :mod:`crfmap.io.bag_reader`: ``read_bag``
+- :mod:`crfmap.io.bag_writer`: ``write_bag``
+- :mod:`crfmap.io.carmen`: ``read_carmen``
+- :mod:`crfmap.io.map_server`: ``load_map``, ``save_map``, ``read_map_yaml``, ``map_yaml_text``
+- :mod:`crfmap.io.grid_files`: ``load_grid``, ``save_grid`` (by suffix)
+- :mod:`crfmap.io.npy_grid`: ``load_npy``, ``save_npy``, ``npy_sidecar_path``
+- :mod:`crfmap.io.atomic`: ``atomic_path``, ``atomic_dir``
+"""
+from __future__ import annotations
+
+import importlib
+
+_API = {
+    "read_bag": "bag_reader",
+    "write_bag": "bag_writer",
+    "read_carmen": "carmen",
+    "load_map": "map_server",
+    "save_map": "map_server",
+    "load_grid": "grid_files",
+    "save_grid": "grid_files",
+    "read_map_yaml": "map_server",
+    "map_yaml_text": "map_server",
+    "load_npy": "npy_grid",
+    "save_npy": "npy_grid",
+    "npy_sidecar_path": "npy_grid",
+    "atomic_path": "atomic",
+    "atomic_dir": "atomic",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

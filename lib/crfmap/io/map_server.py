@@ -1,0 +1,400 @@
+"""Occupancy grids as files: ROS map_server maps (YAML + image) and exact ``.npy`` grids.
+
+map_server maps
+    A YAML file (``image, mode, resolution, origin [x, y, yaw], negate, occupied_thresh,
+    free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads loads).
+    Loading follows **nav2_map_server**'s ``map_io.cpp`` (``loadMapYaml`` +
+    ``loadMapFromFile``) value for value; saving follows its ``saveMapToFile``. Where ROS 1's
+    ``map_server`` (``image_loader.cpp``, ``map_saver.cpp``) differs, the docstrings say so.
+    A loaded grid holds the OccupancyGrid values the map server would publish, divided by
+    100 (unknown, -1, becomes 0.5).
+
+``.npy`` grids (:mod:`crfmap.io.npy_grid`; ``save_npy``, ``load_npy`` and ``npy_sidecar_path`` are importable here too)
+    The float P(occupied) array itself, bit for bit, plus a small sidecar YAML
+    ``<name>.npy.yaml`` holding resolution, origin and frame_id (a plain ``.npy`` cannot).
+
+:func:`crfmap.io.grid_files.load_grid` / ``save_grid`` choose by suffix (``.yaml``/``.yml`` or ``.npy``).
+
+>>> grid = load_grid("map.yaml")                    # doctest: +SKIP
+>>> save_grid(grid, "copy.yaml", mode="scale")      # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+from crfmap.io._yaml import finite_number, format_number, read_mapping
+from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
+from crfmap.io.atomic import atomic_path
+from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
+from crfmap.io.npy_grid import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
+
+MAP_MODES = ("trinary", "scale", "raw")
+MAP_SUFFIXES = (".yaml", ".yml")
+IMAGE_FORMATS = ("pgm", "png")
+
+# Pixel values both map savers write in trinary mode.
+FREE_PIXEL, OCCUPIED_PIXEL, UNKNOWN_PIXEL = 254, 0, 205
+
+# Save defaults. occupied 0.65 is both savers' default. For free, nav2's map_saver uses 0.25,
+# but then its own loader reads the unknown pixel 205 (occ = 50/255 = 0.196) as *free*
+# (slam_toolbox issue #587, navigation2 PR #5138); ROS 1's map_saver writes 0.196, just
+# under 205's occ, so unknown stays unknown. We write 0.196.
+OCCUPIED_THRESH_DEFAULT = 0.65
+FREE_THRESH_DEFAULT = 0.196
+# Scale mode with thresholds 0 and 1 makes nav2's grey image lossless: occ = value / 100.
+SCALE_THRESHOLDS = (1.0, 0.0)  # (occupied, free)
+
+_QUANTUM_MAX = 65535.0  # nav2 reads images with GraphicsMagick at 16 bits per channel (Q16)
+_REQUIRED_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh")
+_PNM_SEP = rb"(?:\s|#[^\n]*\n)+"
+_PNM_HEADER = re.compile(rb"\A(P[1-6])" + _PNM_SEP + rb"(\d+)" + _PNM_SEP + rb"(\d+)")
+_PNM_BINARY_HEADER = re.compile(rb"\A(P[56])" + (_PNM_SEP + rb"(\d+)") * 3 + rb"\s")
+
+
+# --- reading the YAML -----------------------------------------------------------------------
+def _check_thresholds(occupied, free, source):
+    for key, value in (("occupied_thresh", occupied), ("free_thresh", free)):
+        if not 0.0 <= value <= 1.0:
+            raise InputError(source, f"'{key}' must lie in [0, 1], got {value:g}")
+    if not free < occupied:
+        raise InputError(source, f"free_thresh ({free:g}) must be smaller than occupied_thresh ({occupied:g})")
+
+
+def read_map_yaml(yaml_path) -> dict:
+    """Parse and check a map_server YAML file, as nav2's ``loadMapYaml`` does.
+
+    Returns a dict with ``image`` (as written), ``image_path`` (resolved: relative names
+    are relative to the YAML's folder), ``resolution``, ``origin`` (3 floats), ``negate``
+    (0/1), ``occupied_thresh``, ``free_thresh``, ``mode`` (default ``"trinary"``) and
+    ``extra`` (any other keys). All keys but ``mode`` are required, as in nav2 and ROS 1.
+    Stricter than nav2: ``negate`` must be 0/1/true/false, thresholds must lie in [0, 1]
+    with free < occupied, resolution must be positive.
+
+    >>> read_map_yaml("map.yaml")["resolution"]  # doctest: +SKIP
+    0.05
+    """
+    path = Path(yaml_path)
+    doc = read_mapping(path, "map YAML file")
+    for key in _REQUIRED_KEYS:
+        if key not in doc:
+            raise InputError(path, f"missing key '{key}'")
+    image = doc["image"]
+    if not isinstance(image, str) or not image.strip():
+        raise InputError(path, f"key 'image' must be an image file name, got {image!r}")
+    resolution = finite_number(doc["resolution"], path, "resolution")  # [m/cell]
+    if resolution <= 0:
+        raise InputError(path, f"key 'resolution' must be positive (metres per cell), got {resolution:g}")
+    origin = doc["origin"]
+    if not isinstance(origin, (list, tuple)) or len(origin) != 3:
+        raise InputError(path, f"key 'origin' must be a list [x, y, yaw] of 3 numbers, got {origin!r}")
+    origin = tuple(finite_number(v, path, "origin") for v in origin)
+    negate = doc["negate"]
+    if isinstance(negate, str) and negate.strip().lower() in ("0", "1", "true", "false"):
+        negate = negate.strip().lower() in ("1", "true")
+    if isinstance(negate, bool) or negate in (0, 1) and isinstance(negate, int):
+        negate = int(negate)
+    else:
+        raise InputError(path, f"key 'negate' must be 0, 1, true or false, got {negate!r}")
+    occupied = finite_number(doc["occupied_thresh"], path, "occupied_thresh")
+    free = finite_number(doc["free_thresh"], path, "free_thresh")
+    _check_thresholds(occupied, free, path)
+    mode = doc.get("mode", "trinary")
+    if mode not in MAP_MODES:
+        raise InputError(path, f"unknown mode {mode!r} (expected one of {', '.join(MAP_MODES)})")
+    image_path = Path(image) if Path(image).is_absolute() else path.parent / image
+    extra = {k: v for k, v in doc.items() if k not in _REQUIRED_KEYS + ("mode",)}
+    return dict(image=image, image_path=image_path, resolution=resolution, origin=origin,
+                negate=negate, occupied_thresh=occupied, free_thresh=free, mode=mode, extra=extra)
+
+
+# --- reading the image ----------------------------------------------------------------------
+def _check_pnm_header(image_path, source, context):
+    """Clear messages for empty or truncated PNM files (Pillow's are vaguer)."""
+    with open(image_path, "rb") as f:
+        head = f.read(512)
+    match = _PNM_HEADER.match(head)
+    if not match:
+        return
+    width, height = int(match.group(2)), int(match.group(3))
+    if width == 0 or height == 0:
+        raise InputError(source, f"empty image ({width} x {height} pixels){context}")
+    binary = _PNM_BINARY_HEADER.match(head)
+    if binary:  # P5 (grey) / P6 (colour): the header fixes the number of pixel bytes
+        maxval = int(binary.group(4))
+        expected = width * height * (1 if binary.group(1) == b"P5" else 3) * (1 if maxval < 256 else 2)
+        found = Path(image_path).stat().st_size - binary.end()
+        if found < expected:
+            raise InputError(source, f"truncated image: its header promises {width} x {height} pixels "
+                                     f"({expected} bytes) but the file holds {found} bytes{context}")
+
+
+def _read_pixels(image_path, context=""):
+    """Colour-channel sum and alpha of every pixel, as GraphicsMagick Q16 quanta (0..65535).
+
+    Returns ``(colour_sum[h, w], alpha[h, w] or None)``, top image row first; the colour sum
+    adds R, G and B (a grey pixel counts three times, as GraphicsMagick reads grey as R=G=B).
+    """
+    source = Path(image_path)
+    if not source.exists():
+        raise InputError(source, f"image file not found{context}")
+    if source.is_dir():
+        raise InputError(source, f"is a folder, expected an image file{context}")
+    if source.stat().st_size == 0:
+        raise InputError(source, f"empty image file (0 bytes){context}")
+    try:
+        _check_pnm_header(source, source, context)
+        with Image.open(source) as img:
+            img.load()
+            return _pixels_from_pil(img, source, context)
+    except InputError:
+        raise
+    except UnidentifiedImageError:
+        raise InputError(source, f"not an image Pillow can read{context}") from None
+    except Image.DecompressionBombError as exc:
+        raise InputError(source, f"image too large for Pillow's safety limit ({exc}){context}") from None
+    except (OSError, SyntaxError, ValueError) as exc:  # Pillow's "image file is truncated", bad data
+        raise InputError(source, f"unreadable image ({exc}){context}") from None
+
+
+def _pixels_from_pil(img, source, context):
+    if img.width == 0 or img.height == 0:
+        raise InputError(source, f"empty image ({img.width} x {img.height} pixels){context}")
+    mode = img.mode
+    if mode in ("I", "I;16", "I;16B", "I;16L", "I;16N"):  # 16-bit grey
+        grey = np.asarray(img).astype(np.float64)
+        if grey.min() < 0 or grey.max() > _QUANTUM_MAX:
+            raise InputError(source, f"integer image values outside 0..65535 are not supported{context}")
+        return 3.0 * grey, None
+    if mode == "1":
+        img = img.convert("L")
+    elif mode == "P":
+        img = img.convert("RGBA" if "transparency" in img.info else "RGB")
+    elif mode not in ("L", "LA", "RGB", "RGBA"):
+        img = img.convert("RGBA" if "A" in img.getbands() else "RGB")
+    px = np.asarray(img).astype(np.float64) * 257.0  # 8 bits -> 16-bit quanta, exactly
+    if img.mode == "L":
+        return 3.0 * px, None
+    if img.mode == "LA":
+        return 3.0 * px[..., 0], px[..., 1]
+    colour = px[..., 0] + px[..., 1] + px[..., 2]
+    return colour, (px[..., 3] if img.mode == "RGBA" else None)
+
+
+def _occupancy_from_pixels(colour_sum, alpha, mode, negate, occupied_thresh, free_thresh):
+    """nav2's per-pixel rule, vectorised; int8 values in image row order (top row first).
+
+    In trinary mode alpha (opacity) is averaged in with R, G, B, as nav2 and ROS 1 both do
+    "to preserve existing behaviour"; in scale mode a pixel that is not fully opaque is
+    unknown; raw mode ignores ``negate`` (nav2; ROS 1 applies it and wraps values > 127).
+    """
+    if mode == "trinary" and alpha is not None:
+        shade = (colour_sum + alpha) / 4.0 / _QUANTUM_MAX
+    else:
+        shade = colour_sum / 3.0 / _QUANTUM_MAX
+    if mode == "raw":
+        percent = np.floor(shade * 255.0 + 0.5)  # std::round, for non-negative values
+        return np.where((percent >= 0) & (percent <= 100), percent, -1).astype(np.int8)
+    occ = shade if negate else 1.0 - shade
+    out = np.full(occ.shape, -1, dtype=np.int8)
+    if mode == "scale":
+        # ROS 1 differs here: thresholds first, only alpha == 0 unknown, value 1 + 98*ratio truncated.
+        ratio = (occ - free_thresh) / (occupied_thresh - free_thresh)
+        out[...] = np.rint(np.clip(ratio, 0.0, 1.0) * 100.0).astype(np.int8)
+    out[occ < free_thresh] = 0
+    out[occupied_thresh < occ] = 100
+    if mode == "scale" and alpha is not None:
+        out[alpha != _QUANTUM_MAX] = -1
+    return out
+
+
+def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None) -> OccupancyGrid:
+    """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
+
+    Per pixel: ``shade`` = mean of R, G, B (and alpha, in trinary mode, if the image has
+    one) in [0, 1]; ``occ = shade`` if ``negate`` else ``1 - shade``. Trinary:
+    ``occ > occupied_thresh`` -> 100, ``occ < free_thresh`` -> 0, else -1. Scale: not fully
+    opaque -> -1, else as trinary but values in between become
+    ``rint((occ - free) / (occupied - free) * 100)`` (ROS 1: ``1 + 98 * ratio``, truncated).
+    Raw: ``round(shade * 255)`` if in 0..100, else -1 (nav2 ignores ``negate`` there).
+    The top image row is the highest y (row flip); cell (0, 0) sits at ``origin``.
+
+    ``occupied_thresh`` / ``free_thresh`` override the file's thresholds (loading only;
+    ``grid.meta`` keeps the file's values). Example: maps written by nav2 carry
+    ``free_thresh: 0.25``, under which their unknown pixels (205) load as free, as in nav2;
+    ``free_thresh=0.196`` (ROS 1's value) keeps them unknown.
+
+    ``grid.meta`` holds ``image, mode, negate, occupied_thresh, free_thresh`` as the YAML
+    states them, plus ``source`` (the YAML path), ``image_path`` and any extra YAML keys,
+    so that :func:`save_map` can write the same kind of map back.
+
+    Raises :class:`InputError` naming the file for a missing/unparsable YAML, a missing
+    or ill-typed key, an unknown mode, and a missing, unreadable, truncated or empty image.
+
+    >>> grid = load_map("map.yaml")          # doctest: +SKIP
+    >>> grid.to_int8()[0, :3]                # doctest: +SKIP
+    array([-1, -1,  0], dtype=int8)
+    """
+    params = read_map_yaml(yaml_path)
+    occ_t = params["occupied_thresh"] if occupied_thresh is None else float(occupied_thresh)
+    free_t = params["free_thresh"] if free_thresh is None else float(free_thresh)
+    if occupied_thresh is not None or free_thresh is not None:
+        _check_thresholds(occ_t, free_t, "load_map thresholds")
+    colour, alpha = _read_pixels(params["image_path"], f" (the image of {Path(yaml_path)})")
+    values = _occupancy_from_pixels(colour, alpha, params["mode"], params["negate"], occ_t, free_t)
+    meta = dict(params["extra"])
+    meta.update({key: params[key] for key in ("image", "mode", "negate", "occupied_thresh", "free_thresh")})
+    meta.update(source=str(yaml_path), image_path=str(params["image_path"]))
+    return OccupancyGrid.from_int8(values[::-1], resolution=params["resolution"],
+                                   origin=params["origin"], frame_id="map", meta=meta)
+
+
+# --- writing ------------------------------------------------------------------------------
+def _format_name(name: str) -> str:
+    if re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.+\-]*", name):
+        return name
+    return json.dumps(name)  # a JSON string is a valid YAML double-quoted scalar
+
+
+def map_yaml_text(image_name, mode, resolution, origin, occupied_thresh, free_thresh) -> str:
+    """The YAML nav2's map_saver writes: same keys, order and layout, no final newline.
+
+    >>> print(map_yaml_text("map.pgm", "trinary", 0.05, (-1.5, 2, 0), 0.65, 0.196))
+    image: map.pgm
+    mode: trinary
+    resolution: 0.05
+    origin: [-1.5, 2, 0]
+    negate: 0
+    occupied_thresh: 0.65
+    free_thresh: 0.196
+    """
+    origin_text = ", ".join(format_number(v) for v in origin)
+    return (f"image: {_format_name(image_name)}\nmode: {mode}\nresolution: {format_number(resolution)}\n"
+            f"origin: [{origin_text}]\nnegate: 0\noccupied_thresh: {format_number(occupied_thresh)}\n"
+            f"free_thresh: {format_number(free_thresh)}")
+
+
+def _pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
+    """nav2's ``tryWriteMapToFile`` per-cell rule: (grey uint8, alpha uint8 or None), top row first.
+
+    Trinary: ``v <= rint(100 free)`` -> 254, ``v >= rint(100 occupied)`` -> 0, else and
+    unknown -> 205. Scale: grey ``(100 - v) / 100``, unknown -> grey 0.5 and transparent
+    (GraphicsMagick may round a tie to the other grey level; the value read back is the
+    same). Raw: grey ``v``, unknown -> 255.
+    """
+    v = np.asarray(values, dtype=np.int16)[::-1]  # image rows: top row = highest y
+    unknown = (v < 0) | (v > 100)
+    if mode == "trinary":
+        grey = np.full(v.shape, UNKNOWN_PIXEL, dtype=np.uint8)
+        grey[v >= int(np.rint(occupied_thresh * 100.0))] = OCCUPIED_PIXEL
+        grey[v <= int(np.rint(free_thresh * 100.0))] = FREE_PIXEL
+        grey[unknown] = UNKNOWN_PIXEL
+        return grey, None
+    if mode == "scale":
+        grey = np.rint((100.0 - v) / 100.0 * 255.0)
+        grey[unknown] = np.rint(0.5 * 255.0)
+        alpha = np.where(unknown, 0, 255).astype(np.uint8)
+        return grey.astype(np.uint8), alpha
+    if mode == "raw":
+        return np.where(unknown, 255, v).astype(np.uint8), None
+    raise InputError("mode", f"unknown map mode {mode!r} (expected one of {', '.join(MAP_MODES)})")
+
+
+def _write_image(path, grey, alpha, image_format):
+    """Write the pixels; ``path`` is a temporary file, so the format is given explicitly."""
+    if image_format == "pgm":  # the header GraphicsMagick writes; PGM has no alpha channel
+        height, width = grey.shape
+        with open(path, "wb") as f:
+            f.write(b"P5\n%d %d\n255\n" % (width, height))
+            f.write(np.ascontiguousarray(grey).tobytes())
+    elif alpha is None:
+        Image.fromarray(grey, mode="L").save(path, format="PNG")
+    else:  # nav2 writes scale maps as TrueColorMatte (RGBA)
+        rgba = np.stack([grey, grey, grey, alpha], axis=-1)
+        Image.fromarray(rgba, mode="RGBA").save(path, format="PNG")
+
+
+def _resolve_save_options(grid, mode, occupied_thresh, free_thresh, image_format):
+    meta = grid.meta or {}
+    if mode is None:
+        mode = meta.get("mode") if meta.get("mode") in MAP_MODES else "trinary"
+    if mode not in MAP_MODES:
+        raise InputError("mode", f"unknown map mode {mode!r} (expected one of {', '.join(MAP_MODES)})")
+    same_kind = meta.get("mode") == mode
+    if mode == "scale":
+        default_occ, default_free = SCALE_THRESHOLDS
+    elif same_kind and "occupied_thresh" in meta and "free_thresh" in meta:
+        default_occ, default_free = meta["occupied_thresh"], meta["free_thresh"]
+    else:
+        default_occ, default_free = OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT
+    occ = float(default_occ if occupied_thresh is None else occupied_thresh)
+    free = float(default_free if free_thresh is None else free_thresh)
+    _check_thresholds(occ, free, "save_map thresholds")
+    if image_format is None:
+        old = Path(str(meta.get("image", ""))).suffix.lower().lstrip(".")
+        image_format = old if same_kind and old in IMAGE_FORMATS else ("png" if mode == "scale" else "pgm")
+    image_format = str(image_format).lower().lstrip(".")
+    if image_format not in IMAGE_FORMATS:
+        raise InputError("image_format", f"{image_format!r} is not supported (expected pgm or png)")
+    return mode, occ, free, image_format
+
+
+def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, free_thresh=None,
+             image_format=None):
+    """Write ``grid`` as a map_server map, as nav2's map_saver does; returns (yaml_path, image_path).
+
+    The image is ``<yaml stem>.<image_format>`` beside the YAML, named in it without a
+    folder; ``negate`` is always 0. Cell values are ``grid.to_int8()`` (P rounded to
+    percent; exactly 0.5 is unknown). Both files are written atomically, image first.
+
+    Defaults (``None``): ``mode`` from ``grid.meta`` (a loaded map's) else ``"trinary"``.
+    Thresholds: trinary/raw reuse ``grid.meta``'s when it has the same mode (so a loaded
+    map writes back unchanged), else 0.65 / 0.196 (ROS 1 map_saver's YAML values: nav2's
+    0.25 would make its own loader read unknown 205 as free). Scale uses 1.0 / 0.0, which
+    makes nav2's grey image lossless: reloading gives every int8 value back exactly, i.e.
+    P back to within 0.005 (half a percent step). Explicit scale thresholds write nav2's
+    image unchanged, and map_server then stretches values between them, as it does for
+    nav2's own files. ``image_format``: the loaded map's, else png for scale (nav2's
+    choice: only PNG keeps the alpha that marks unknown) and pgm otherwise. A scale PGM
+    loses the alpha; unknown cells are grey 128 there and reload as 50, i.e. P = 0.5,
+    still unknown in crfmap's convention (map_server publishes 50, not -1).
+
+    A trinary map reloads to the same int8 values when ``free_thresh <= 0.196`` and
+    ``occupied_thresh < 1`` (the loader's view of 254, 205 and 0).
+
+    >>> save_map(grid, "out/map.yaml", mode="scale")  # doctest: +SKIP
+    (PosixPath('out/map.yaml'), PosixPath('out/map.png'))
+    """
+    yaml_path = Path(yaml_path)
+    if yaml_path.suffix.lower() not in MAP_SUFFIXES:
+        raise InputError(yaml_path, "a map_server map file must end in .yaml or .yml")
+    if not isinstance(grid, OccupancyGrid):
+        raise InputError(yaml_path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
+    mode, occ, free, image_format = _resolve_save_options(grid, mode, occupied_thresh, free_thresh,
+                                                          image_format)
+    image_path = yaml_path.with_suffix("." + image_format)
+    grey, alpha = _pixels_from_occupancy(grid.to_int8(), mode, occ, free)
+    text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, occ, free)
+    image_existed = image_path.exists()
+    with atomic_path(image_path) as tmp:
+        _write_image(tmp, grey, alpha, image_format)
+    try:
+        with atomic_path(yaml_path) as tmp:
+            _write_text(tmp, text)
+    except BaseException:
+        if not image_existed:  # leave no half a map behind
+            image_path.unlink(missing_ok=True)
+        raise
+    return yaml_path, image_path
+
+
+
+__all__ = [
+    "MAP_MODES", "OCCUPIED_THRESH_DEFAULT", "FREE_THRESH_DEFAULT", "read_map_yaml", "load_map",
+    "save_map", "map_yaml_text", 
+]

@@ -1,0 +1,104 @@
+"""Occupancy grids as exact ``.npy`` files: the float P(occupied) array, bit for bit.
+
+A plain ``.npy`` cannot hold where the grid lies, so a small sidecar YAML beside it,
+``<name>.npy.yaml`` (:func:`npy_sidecar_path`), holds ``resolution``, ``origin`` and
+``frame_id``. Without a sidecar a grid loads with resolution 1 m, origin (0, 0, 0) in
+``map``. For ROS map_server maps see :mod:`crfmap.io.map_server`, whose :func:`~crfmap.io.map_server.load_grid`
+and :func:`~crfmap.io.map_server.save_grid` choose between the two by suffix.
+
+>>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
+PosixPath('g.npy')
+>>> load_npy("g.npy").resolution  # doctest: +SKIP
+0.05
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from crfmap.io._yaml import finite_number, format_number, read_mapping, write_text
+from crfmap.io.atomic import atomic_path
+from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid, check_probability_array
+
+
+def npy_sidecar_path(npy_path) -> Path:
+    """The metadata file of an ``.npy`` grid: ``map.npy`` -> ``map.npy.yaml``.
+
+    Not ``map.yaml``, which would clash with a map_server map of the same name.
+    """
+    npy_path = Path(npy_path)
+    return npy_path.with_name(npy_path.name + ".yaml")
+
+
+def save_npy(grid: OccupancyGrid, path) -> Path:
+    """Save P(occupied) exactly as a 2-D float ``.npy`` [y, x] plus its sidecar YAML.
+
+    The sidecar (:func:`npy_sidecar_path`) holds ``resolution``, ``origin`` and
+    ``frame_id``; both files are written atomically, array first.
+
+    >>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
+    PosixPath('g.npy')
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".npy":
+        raise InputError(path, "an .npy grid file must end in .npy")
+    if not isinstance(grid, OccupancyGrid):
+        raise InputError(path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
+    sidecar = npy_sidecar_path(path)
+    text = (f"# crfmap grid metadata for {path.name}: P(occupied) as float [y, x], row 0 = lowest y\n"
+            f"resolution: {format_number(grid.resolution)}\n"
+            f"origin: [{', '.join(format_number(v) for v in grid.origin)}]\n"
+            f"frame_id: {json.dumps(grid.frame_id)}\n")
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:  # a file object: np.save would append .npy to a name
+            np.save(f, np.ascontiguousarray(grid.probability), allow_pickle=False)
+    with atomic_path(sidecar) as tmp:
+        write_text(tmp, text)
+    return path
+
+
+def _read_sidecar(sidecar):
+    doc = read_mapping(sidecar, "crfmap .npy metadata (resolution, origin, frame_id)")
+    resolution = finite_number(doc.get("resolution", 1.0), sidecar, "resolution")
+    if resolution <= 0:
+        raise InputError(sidecar, f"key 'resolution' must be positive, got {resolution:g}")
+    origin = doc.get("origin", [0.0, 0.0, 0.0])
+    if not isinstance(origin, (list, tuple)) or len(origin) not in (2, 3):
+        raise InputError(sidecar, f"key 'origin' must be a list [x, y, yaw], got {origin!r}")
+    origin = tuple(finite_number(v, sidecar, "origin") for v in origin)
+    frame_id = doc.get("frame_id", "map")
+    if not isinstance(frame_id, str):
+        raise InputError(sidecar, f"key 'frame_id' must be a string, got {frame_id!r}")
+    return resolution, origin, frame_id
+
+
+def load_npy(path) -> OccupancyGrid:
+    """Load a P(occupied) ``.npy`` grid (2-D float in [0, 1]) and its sidecar if present.
+
+    Without a sidecar: resolution 1 m, origin (0, 0, 0), frame ``map``.
+
+    >>> load_npy("g.npy").shape  # doctest: +SKIP
+    (2, 3)
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(path, ".npy grid file not found")
+    try:
+        arr = np.load(path, allow_pickle=False)
+    except ValueError as exc:
+        raise InputError(path, f"not a plain .npy array ({exc})") from None
+    except (OSError, EOFError) as exc:
+        raise InputError(path, f"unreadable .npy file ({exc})") from None
+    if not isinstance(arr, np.ndarray):
+        arr.close()
+        raise InputError(path, "is an .npz archive, expected a single .npy array")
+    if arr.ndim == 2 and arr.size and not np.issubdtype(arr.dtype, np.floating):
+        raise InputError(path, f"expected float probabilities, got dtype {arr.dtype}")
+    arr = check_probability_array(arr, path)  # 2-D, not empty, finite, in [0, 1]
+    sidecar = npy_sidecar_path(path)
+    resolution, origin, frame_id = _read_sidecar(sidecar) if sidecar.exists() else (1.0, (0.0, 0.0, 0.0), "map")
+    return OccupancyGrid(arr, resolution=resolution, origin=origin, frame_id=frame_id,
+                         meta={"source": str(path)})

@@ -1,0 +1,84 @@
+"""Saving what notebooks produce: figures to ``figures/``, tables and numbers to ``paper/generated/``.
+
+Every notebook saves through these functions (and so through :mod:`crfmap.paths`), atomically,
+so the paper always quotes the numbers the code produced.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from crfmap import paths
+from crfmap.io.atomic import atomic_path
+
+
+def _clean(value):
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _clean(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return None if math.isnan(v) or math.isinf(v) else v
+    return value
+
+
+def save_figure(fig, name: str, dpi: int = 150) -> Path:
+    """Save a matplotlib figure as ``figures/<name>.png``; returns the path."""
+    paths.FIGURES.mkdir(parents=True, exist_ok=True)
+    target = paths.FIGURES / f"{name}.png"
+    with atomic_path(target) as tmp:
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
+    return target
+
+
+def save_numbers(name: str, numbers: dict) -> Path:
+    """Save a dict of numbers as ``paper/generated/<name>.json`` (NaN/inf become null)."""
+    paths.GENERATED.mkdir(parents=True, exist_ok=True)
+    target = paths.GENERATED / f"{name}.json"
+    with atomic_path(target) as tmp:
+        Path(tmp).write_text(json.dumps(_clean(numbers), indent=2, sort_keys=True) + "\n")
+    return target
+
+
+def load_numbers(name: str) -> dict:
+    return json.loads((paths.GENERATED / f"{name}.json").read_text())
+
+
+def format_cell(value, digits: int = 4) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isnan(v):
+            return "n/a"
+        if v != 0 and (abs(v) < 10 ** -(digits - 1) or abs(v) >= 1e5):
+            return f"{v:.{digits - 1}e}"
+        return f"{v:.{digits}f}".rstrip("0").rstrip(".") if "." in f"{v:.{digits}f}" else f"{v:.{digits}f}"
+    return str(value)
+
+
+def markdown_table(header, rows, digits: int = 4) -> str:
+    """A GitHub-flavoured Markdown table."""
+    lines = ["| " + " | ".join(str(h) for h in header) + " |", "|" + "---|" * len(header)]
+    for row in rows:
+        lines.append("| " + " | ".join(format_cell(v, digits) for v in row) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def save_table(name: str, header, rows, digits: int = 4, caption: str = "") -> Path:
+    """Save a table as ``paper/generated/<name>.md`` (Markdown) and ``<name>.json`` (raw values)."""
+    paths.GENERATED.mkdir(parents=True, exist_ok=True)
+    text = (f"{caption}\n\n" if caption else "") + markdown_table(header, rows, digits)
+    target = paths.GENERATED / f"{name}.md"
+    with atomic_path(target) as tmp:
+        Path(tmp).write_text(text)
+    save_numbers(name, {"header": list(header), "rows": [list(r) for r in rows], "caption": caption})
+    return target

@@ -1,0 +1,37 @@
+"""Simulated sensing: the laser, how the robot drives, and the simulator that records scans of a scene.
+
+Public API (imported on first use, so ``import crfmap.sim`` stays cheap):
+
+- :mod:`crfmap.sim.laser`: ``Laser``, ``LEGACY_NO_RETURN``
+- :mod:`crfmap.sim.motion`: ``Motion``, ``explore_reachable``, ``look_around``, ``follow_waypoints``
+- :mod:`crfmap.sim.simulator`: ``simulate``, ``cast_rays``, ``add_range_noise``
+"""
+from __future__ import annotations
+
+import importlib
+
+_API = {
+    "Laser": "laser",
+    "LEGACY_NO_RETURN": "laser",
+    "Motion": "motion",
+    "explore_reachable": "motion",
+    "look_around": "motion",
+    "follow_waypoints": "motion",
+    "simulate": "simulator",
+    "cast_rays": "simulator",
+    "add_range_noise": "simulator",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -1,0 +1,76 @@
+"""The benchmark runs, reports in its schema, and its baseline computes what crfmap computes."""
+import io
+import json
+from contextlib import redirect_stdout
+
+import numpy as np
+import pytest
+
+from crfmap.bench import suite as bench
+from crfmap.cli import main
+from crfmap.crf.lbp import infer
+
+KEYS = {"method", "size", "dtype", "threads", "seconds_per_iteration", "mcells_per_second"}
+
+
+@pytest.fixture(scope="module")
+def quick_records():
+    out = io.StringIO()
+    with redirect_stdout(out):
+        status = main(["bench", "--quick", "--json", "--sizes", "64", "--repeats", "1", "--no-online", "--no-memory"])
+    assert status == 0
+    return [json.loads(line) for line in out.getvalue().splitlines() if line.strip()]
+
+
+def test_quick_bench_records_follow_the_schema(quick_records):
+    methods = {r["method"] for r in quick_records}
+    assert {"numpy-baseline", "crfmap-fast", "crfmap-infer", "memory-bandwidth", "agreement",
+            "crfmap-converge", "crfmap-converge-exact"} <= methods
+    for r in quick_records:
+        assert KEYS <= set(r), r
+    timed = [r for r in quick_records if r["method"] in ("numpy-baseline", "crfmap-fast", "crfmap-infer")]
+    for r in timed:
+        assert r["size"] == 64 and r["seconds_per_iteration"] > 0 and r["mcells_per_second"] > 0
+        assert r["dtype"] in ("float32", "float64")
+    assert {r["threads"] for r in quick_records if r["method"] == "crfmap-fast"} >= {1}
+    for r in quick_records:
+        if r["method"].startswith("crfmap-converge"):
+            assert r["iterations"] >= 1 and r["seconds_to_converge"] > 0 and r["converged"]
+    # PGMax / PyMaxflow rows: a result when installed, else one record each saying how to install
+    from crfmap.bench.external import available
+
+    for name, method in (("pgmax", "pgmax-bp"), ("pymaxflow", "pymaxflow-map")):
+        rows = [r for r in quick_records if r["method"] == method]
+        assert rows, method
+        if available()[name] is None:
+            assert len(rows) == 1 and rows[0]["note"].startswith("not installed")
+    bw = [r for r in quick_records if r["method"] == "memory-bandwidth"]
+    assert all(r["gbytes_per_second"] > 0 and r["bound_mcells_per_second"]["float32"] > 0 for r in bw)
+
+
+def test_baseline_and_crfmap_agree_after_k_iterations(quick_records):
+    (agree,) = [r for r in quick_records if r["method"] == "agreement"]
+    assert agree["max_difference_baseline_vs_fast"] < 1e-10
+    assert agree["max_difference_plain_vs_fast"] < 1e-10
+
+
+@pytest.mark.parametrize("shape", [(1, 7), (6, 1), (5, 6), (33, 20)])
+@pytest.mark.parametrize("hidden", [[[10.0, 1.0], [1.0, 10.0]], [[3.0, 0.7], [1.3, 2.5]], [[1.0, 0.0], [0.0, 1.0]]])
+def test_numpy_baseline_equals_the_plain_kernel(shape, hidden):
+    obs = np.random.default_rng(7).uniform(0.0, 1.0, shape)
+    nb = bench.NumpyCheckerboard(obs, hidden, dtype=np.float64)
+    nb.iterate(6)
+    plain = infer(obs, hidden, max_iter=6, tol=0.0, kernel="plain")
+    np.testing.assert_allclose(nb.beliefs(), plain.beliefs.probability, atol=1e-8)
+
+
+def test_bench_grid_kinds():
+    assert bench.bench_grid(32).shape == (32, 32)
+    office = bench.bench_grid(64, kind="office")
+    assert set(np.unique(office)) <= {0.2, 0.8}
+
+
+def test_bad_bench_arguments_are_one_line_errors(capsys):
+    assert main(["bench", "--sizes", "4"]) == 2
+    assert "--sizes" in capsys.readouterr().err
+    assert main(["bench", "--repeats", "0"]) == 2

@@ -1,0 +1,203 @@
+"""The fast kernels (odds, red/black planes, temporal blocking, frozen tiles) against the plain ones."""
+import numpy as np
+import pytest
+
+import crfmap.crf.packed as F
+from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
+from crfmap.crf.lbp import MESSAGE_FLOOR, disc_region, infer
+from crfmap.crf.potentials import directional_tables
+
+RNG = np.random.default_rng(2024)
+TABLES = [
+    ([[10.0, 1.0], [1.0, 10.0]], "receiver"),
+    ([[3.0, 0.7], [1.3, 2.5]], "receiver"),  # non-symmetric, thesis pairing
+    ([[3.0, 0.7], [1.3, 2.5]], "oriented"),  # non-symmetric, proper pairwise CRF
+    ([[1.0, 0.0], [0.0, 1.0]], "receiver"),  # hard table: messages hit the floor
+]
+LINK = [[1.1, 0.1], [0.2, 1.3]]
+
+
+def packed_run(obs, hidden, pairing, passes, threads=2, dtype=np.float64):
+    """Run the fast kernel pass by pass; (beliefs, messages, changes: NaN but at pass ends)."""
+    h, w = obs.shape
+    block = F.PackedBlock(h, w, dtype, directional_tables(hidden, pairing), MESSAGE_FLOOR)
+    block.set_unary(obs, np.asarray(LINK))
+    changes = np.concatenate([[np.nan] * (n - 1) + [block.run_pass(n, threads)[0]] for n in passes])
+    messages = block.messages(np.full((4, h, w), 0.5))
+    return block.beliefs(), messages, changes
+
+
+@pytest.mark.parametrize("shape", [(1, 9), (9, 1), (2, 2), (3, 4), (5, 7), (40, 41), (301, 96)])
+@pytest.mark.parametrize("hidden, pairing", TABLES)
+def test_fast_iterations_equal_plain_iterations(shape, hidden, pairing):
+    """k fast iterations, however split into blocks, give the plain kernel's k iterations."""
+    obs = RNG.uniform(0.0, 1.0, shape)
+    obs[0, 0], obs[-1, -1] = 0.0, 1.0  # hard evidence too
+    plain = infer(obs, hidden, LINK, pairing=pairing, max_iter=8, tol=0.0, kernel="plain")
+    for passes in ([1] * 8, [8], [3, 5]):
+        beliefs, messages, changes = packed_run(obs, hidden, pairing, passes)
+        np.testing.assert_allclose(beliefs, plain.beliefs.probability, atol=1e-9)
+        np.testing.assert_allclose(messages, plain.messages, atol=1e-9)
+        measured = np.isfinite(changes)
+        assert measured.sum() == len(passes)
+        np.testing.assert_allclose(changes[measured], plain.max_change[measured], atol=1e-9)
+
+
+def test_blocked_pass_uses_several_bands_and_equals_plain():
+    """A tall grid splits into bands (trapezoids, then the gaps between them): still exact."""
+    obs = RNG.uniform(0.0, 1.0, (700, 300))
+    block = F.PackedBlock(700, 300, np.float64, directional_tables([[4.0, 1.0], [1.0, 4.0]]), MESSAGE_FLOOR)
+    edges = block.band_edges(6, threads=2)
+    assert len(edges) >= 3
+    assert np.all(edges[1:-1] % F.TILE_ROWS == 0)
+    assert np.all(np.diff(edges) >= 4 * 6 + 2 * F.TILE_ROWS + 4)
+    beliefs, messages, changes = packed_run(obs, [[4.0, 1.0], [1.0, 4.0]], "receiver", [6, 6])
+    plain = infer(obs, [[4.0, 1.0], [1.0, 4.0]], LINK, max_iter=12, tol=0.0, kernel="plain")
+    np.testing.assert_allclose(beliefs, plain.beliefs.probability, atol=1e-10)
+    np.testing.assert_allclose(changes[[5, 11]], plain.max_change[[5, 11]], atol=1e-10)
+
+
+def test_float32_close_to_float64():
+    obs = RNG.uniform(0.0, 1.0, (120, 130))
+    b64, _, _ = packed_run(obs, [[10.0, 1.0], [1.0, 10.0]], "receiver", [4, 4])
+    b32, _, _ = packed_run(obs, [[10.0, 1.0], [1.0, 10.0]], "receiver", [4, 4], dtype=np.float32)
+    assert np.abs(b32 - b64).max() < 1e-4
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_infer_fast_equals_plain_bounded_with_warm_start(dtype):
+    grid = OccupancyGrid(RNG.uniform(0.1, 0.9, (60, 80)), resolution=0.5)
+    start = infer(grid, max_iter=3, tol=0.0, kernel="plain").messages
+    region = disc_region(grid, (17.0, 12.0), 6.0)
+    plain = infer(grid, region=region, messages=start, max_iter=9, tol=0.0, kernel="plain", dtype=dtype)
+    fast = infer(grid, region=region, messages=start, max_iter=9, tol=0.0, kernel="fast", dtype=dtype)
+    assert fast.kernel == "fast" and plain.kernel == "plain"
+    atol = 1e-10 if dtype == np.float64 else 1e-5
+    np.testing.assert_allclose(fast.beliefs.probability, plain.beliefs.probability, atol=atol)
+    np.testing.assert_allclose(fast.messages, plain.messages, atol=atol)
+    # messages no active cell sends come back bit for bit
+    senders = np.zeros((4,) + region.shape, bool)
+    senders[0, :, 1:] = region[:, :-1]
+    senders[1, :, :-1] = region[:, 1:]
+    senders[2, 1:, :] = region[:-1, :]
+    senders[3, :-1, :] = region[1:, :]
+    np.testing.assert_array_equal(fast.messages[~senders], start.astype(dtype)[~senders])
+
+
+def test_converged_beliefs_are_the_plain_fixed_point():
+    obs = RNG.uniform(0.05, 0.95, (90, 70))
+    plain = infer(obs, [[3.0, 1.0], [1.0, 3.0]], tol=1e-9, kernel="plain")
+    fast = infer(obs, [[3.0, 1.0], [1.0, 3.0]], tol=1e-9)
+    assert fast.kernel == "fast" and fast.converged and plain.converged
+    assert fast.iterations >= plain.iterations  # measured at block ends only
+    assert np.isnan(fast.max_change).any() and fast.max_change[-1] < 1e-9
+    np.testing.assert_allclose(fast.beliefs.probability, plain.beliefs.probability, atol=1e-7)
+
+
+def settling_grid(h=128, w=256, rng=RNG):
+    """Blocks of strong evidence (they settle early) and one noisy, weakly observed patch."""
+    yy, xx = np.mgrid[0:h, 0:w]
+    obs = np.where(((yy // 32) + (xx // 32)) % 2 == 0, 0.05, 0.95)
+    obs[50:70, 150:190] = rng.uniform(0.4, 0.6, (20, 40))
+    return obs
+
+
+@pytest.fixture
+def small_tiles(monkeypatch):
+    monkeypatch.setattr(F, "TILE_ROWS", 8)
+    monkeypatch.setattr(F, "TILE_COLS", 32)
+    monkeypatch.setattr(F, "SPARSE_CELLS", 0)
+
+
+def test_freezing_exactly_settled_tiles_changes_nothing(small_tiles):
+    """freeze=0 skips only tiles whose messages did not move at all: the plain iterations."""
+    obs = settling_grid()
+    h, w = obs.shape
+    n = 120
+    plain = infer(obs, max_iter=n, tol=0.0, kernel="plain")
+    block = F.PackedBlock(h, w, np.float64, directional_tables([[10.0, 1.0], [1.0, 10.0]]), MESSAGE_FLOOR)
+    block.set_unary(obs, np.eye(2))
+    changes = block.run(n, 0.0, threads=2, block=8, freeze=0.0)
+    assert len(changes) == n
+    assert block.cell_updates < 0.8 * n * h * w  # tiles were frozen
+    np.testing.assert_allclose(block.beliefs(), plain.beliefs.probability, atol=1e-12)
+
+
+def test_freezing_converges_to_the_plain_fixed_point(small_tiles):
+    obs = settling_grid()
+    plain = infer(obs, tol=1e-6, kernel="plain", max_iter=3000)
+    fast = infer(obs, tol=1e-6, freeze=1e-8, max_iter=3000)
+    exact = infer(obs, tol=1e-6, freeze=0.0, max_iter=3000)
+    assert plain.converged and fast.converged and exact.converged
+    assert fast.max_change[-1] < 1e-6  # decided by an iteration of every cell
+    assert np.abs(fast.beliefs.probability - plain.beliefs.probability).max() < 1e-5
+    assert np.abs(exact.beliefs.probability - plain.beliefs.probability).max() < 1e-5
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles, seed):
+    """Wherever max_iter cuts the run, a last change below tol was measured on every cell,
+    never on the moving tiles only (the others frozen): else it is reported unmeasured (NaN)."""
+    obs = settling_grid(rng=np.random.default_rng(seed))
+    h, w = obs.shape
+    tol = 1e-6
+    tables = directional_tables([[10.0, 1.0], [1.0, 10.0]])
+    cut_in_a_frozen_phase = 0
+    for max_iter in range(40, 400, 3):
+        block = F.PackedBlock(h, w, np.float64, tables, MESSAGE_FLOOR)
+        block.set_unary(obs, np.eye(2))
+        passes = []
+        run_pass = block.run_pass
+
+        def logged(n, threads, measure=True, active=None, per_tile=True):
+            out = run_pass(n, threads, measure=measure, active=active, per_tile=per_tile)
+            passes.append((active is None, out[0]))
+            return out
+
+        block.run_pass = logged
+        changes = block.run(max_iter, tol, threads=1, block=8, freeze=1e-8)
+        whole_grid, last = passes[-1]
+        if not whole_grid and last < tol:
+            cut_in_a_frozen_phase += 1
+        if changes[-1] < tol:
+            assert whole_grid and changes[-1] == last, max_iter
+    assert cut_in_a_frozen_phase > 0  # the case this test is about did occur
+
+
+def test_warm_start_from_converged_stops_at_once():
+    obs = RNG.uniform(0.1, 0.9, (64, 300))
+    r = infer(obs, tol=1e-8)
+    r2 = infer(obs, tol=1e-8, messages=r.messages)
+    assert r2.iterations == 1 and r2.converged
+
+
+def test_blocks_measure_their_last_iteration_and_grow_after_a_warm_start():
+    obs = RNG.uniform(0.1, 0.9, (50, 60))
+    r = infer(obs, max_iter=20, tol=0.0, block=8)
+    assert r.iterations == 20 and r.max_change.shape == (20,)
+    # from uniform messages: blocks of 8, 8 and the 4 left
+    assert np.flatnonzero(np.isfinite(r.max_change)).tolist() == [7, 15, 19]
+    # warm start: blocks of 1, 2, 4, 8 and the 5 left, measured at iterations 1, 3, 7, 15, 20
+    w = infer(obs, max_iter=20, tol=0.0, block=8, messages=r.messages)
+    assert np.flatnonzero(np.isfinite(w.max_change)).tolist() == [0, 2, 6, 14, 19]
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    ({"kernel": "gpu"}, "kernel"),
+    ({"kernel": "fast", "schedule": "flooding"}, "kernel"),
+    ({"kernel": "fast", "damping": 0.5}, "kernel"),
+    ({"block": 0}, "block"),
+    ({"freeze": 1.0}, "freeze"),
+    ({"threads": 0}, "threads"),
+])
+def test_bad_fast_arguments_are_named(kwargs, word):
+    with pytest.raises(InputError, match=word):
+        infer(np.full((3, 3), 0.5), **kwargs)
+
+
+def test_flooding_and_damping_still_run_on_the_plain_kernels():
+    obs = RNG.uniform(0.1, 0.9, (8, 9))
+    assert infer(obs, schedule="flooding", max_iter=3).kernel == "plain"
+    assert infer(obs, damping=0.3, max_iter=3).kernel == "plain"
+    assert infer(obs, max_iter=3).kernel == "fast"

@@ -1,0 +1,101 @@
+"""The explorer's pure functions (notebook 08 wires widgets to them)."""
+import numpy as np
+import pytest
+
+from crfmap.experiments import explorer
+from crfmap.errors import InputError
+from crfmap.crf.lbp import MESSAGE_FLOOR
+from crfmap.assess.metrics import mse
+
+
+def test_observe_x_is_the_noisy_image_and_reproducible():
+    a = explorer.observe("x", 0.42, seed=3)
+    b = explorer.observe("x", 0.42, seed=3)
+    c = explorer.observe("x", 0.42, seed=4)
+    truth = a.scene.truth.probability
+    assert a.observed.shape == truth.shape
+    assert np.array_equal(a.observed.probability, b.observed.probability)
+    assert not np.array_equal(a.observed.probability, c.observed.probability)
+    assert 0.05 < mse(a.observed, truth) < 0.12  # sigma 0.42: near the thesis's 0.0825
+    assert np.array_equal(explorer.observe("x", 0.0).observed.probability, truth)
+
+
+def test_observe_simulated_scene_leaves_unseen_cells_unknown():
+    ob = explorer.observe("enclosed-train", 0.0)
+    p = ob.observed.probability
+    assert p.shape == ob.scene.truth.shape
+    assert ob.noise_kind.startswith("range")
+    # the filled boxes' insides are never seen by the robot
+    assert np.any(p == 0.5) and np.any(p > 0.5) and np.any(p < 0.5)
+
+
+def test_run_denoises_the_x():
+    ex = explorer.run("x", 0.42, seed=0)
+    assert ex.result.converged
+    assert ex.after.mse < 0.5 * ex.before.mse
+    assert ex.after.accuracy > ex.before.accuracy
+
+
+def test_iterations_and_schedule_are_passed_on():
+    ex = explorer.run("x", 0.42, schedule="thesis", iterations=2)
+    assert ex.result.iterations == 2 and ex.result.schedule == "thesis"
+    none = explorer.run("x", 0.42, iterations=0)
+    # no LBP: the beliefs are the observations (clipped to the message floor)
+    expected = np.clip(none.observation.observed.probability, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)
+    assert np.allclose(none.result.beliefs.probability, expected, atol=1e-12)
+
+
+def test_tables_change_the_result():
+    weak = explorer.run("x", 0.42, hidden=[[1.0, 1.0], [1.0, 1.0]])  # no coupling: LBP changes nothing
+    assert np.allclose(weak.result.beliefs.probability,
+                       np.clip(weak.observation.observed.probability, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR))
+    strong = explorer.run("x", 0.42, hidden=[[10.0, 1.0], [1.0, 10.0]])
+    assert not np.allclose(strong.result.beliefs.probability, weak.result.beliefs.probability)
+
+
+def test_bounded_run_leaves_far_cells_alone():
+    ex = explorer.run("x", 0.42, radius=1.0)
+    region = ex.region
+    assert region is not None and 0 < region.sum() < region.size
+    # cells neither in the bound nor next to it receive no message: their belief is their observation
+    near = region.copy()
+    near[1:, :] |= region[:-1, :]
+    near[:-1, :] |= region[1:, :]
+    near[:, 1:] |= region[:, :-1]
+    near[:, :-1] |= region[:, 1:]
+    far = ~near
+    obs = np.clip(ex.observation.observed.probability, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)
+    assert np.allclose(ex.result.beliefs.probability[far], obs[far], atol=1e-12)
+    assert not np.allclose(ex.result.beliefs.probability[region], obs[region])
+
+
+@pytest.mark.parametrize("scene", explorer.EXPLORER_SCENES)
+def test_every_scene_runs(scene):
+    ex = explorer.run(scene, 0.42 if scene == "x" else 0.05, iterations=3)
+    assert ex.result.beliefs.shape == ex.truth.shape
+    assert 0.0 <= ex.after.mse <= 1.0 and ex.result.iterations <= 3
+
+
+@pytest.mark.parametrize("scene", ["x", "office"])
+def test_explore_draws_a_figure(scene):
+    fig = explorer.explore(scene, 0.42 if scene == "x" else 0.05, iterations=3, radius=1.5)
+    assert len(fig.axes) == 4
+    assert explorer.to_png(fig)[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"scene": "moon"}, "scene"),
+    ({"noise": -0.1}, "noise"),
+    ({"noise": float("nan")}, "noise"),
+    ({"seed": -1}, "seed"),
+    ({"iterations": -2}, "iterations"),
+    ({"iterations": 2.5}, "iterations"),
+    ({"radius": 0.0}, "radius"),
+    ({"schedule": "random"}, "schedule"),
+    ({"hidden": [[1, 2, 3]]}, "hidden"),
+    ({"link": [[-1, 0], [0, 1]]}, "link"),
+])
+def test_bad_settings_name_the_argument(kwargs, name):
+    with pytest.raises(InputError) as err:
+        explorer.run(**kwargs)
+    assert str(err.value).startswith(f"{name}:")

@@ -1,0 +1,105 @@
+"""The package layout: every subpackage's public API resolves, no import circles, no private names across subpackages."""
+import ast
+import importlib
+from pathlib import Path
+
+import pytest
+
+LIB = Path(__file__).resolve().parents[1] / "lib" / "crfmap"
+SUBPACKAGES = sorted(p.name for p in LIB.iterdir() if (p / "__init__.py").exists())
+
+
+@pytest.mark.parametrize("sub", SUBPACKAGES)
+def test_public_api_resolves(sub):
+    package = importlib.import_module(f"crfmap.{sub}")
+    for name in getattr(package, "__all__", []):
+        assert getattr(package, name) is not None, f"crfmap.{sub}.{name}"
+
+
+def _module_name(path):
+    rel = path.relative_to(LIB.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _imports(path):
+    """(module imported, names imported, at module level?) of every crfmap import in a file."""
+    tree = ast.parse(path.read_text())
+    top = {id(n) for n in tree.body}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("crfmap"):
+            yield node.module, [a.name for a in node.names], id(node) in top
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("crfmap"):
+                    yield a.name, [], id(node) in top
+
+
+def _subpackage(module):
+    parts = module.split(".")
+    return parts[1] if len(parts) > 2 or (len(parts) == 2 and parts[1] in SUBPACKAGES) else ""
+
+
+def _graph():
+    graph = {}
+    for path in LIB.rglob("*.py"):
+        name = _module_name(path)
+        deps = set()
+        for mod, names, _ in _imports(path):
+            for n in names:  # `from crfmap.crf import packed` imports a module
+                if importlib.util.find_spec(f"{mod}.{n}") if _is_package(mod) else False:
+                    deps.add(f"{mod}.{n}")
+            deps.add(mod)
+        graph[name] = deps - {name}
+    return graph
+
+
+def _is_package(mod):
+    spec = importlib.util.find_spec(mod)
+    return spec is not None and spec.submodule_search_locations is not None
+
+
+def test_no_import_circles():
+    graph = _graph()
+    # a package's __init__ resolves names lazily; it imports nothing at load time
+    state, stack = {}, []
+
+    def visit(node):
+        state[node] = "open"
+        stack.append(node)
+        for dep in graph.get(node, ()):
+            if dep not in graph:
+                continue
+            if state.get(dep) == "open":
+                cycle = stack[stack.index(dep):] + [dep]
+                pytest.fail("import circle: " + " -> ".join(cycle))
+            if dep not in state:
+                visit(dep)
+        stack.pop()
+        state[node] = "done"
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node)
+
+
+def test_no_private_name_across_subpackages():
+    offenders = []
+    for path in LIB.rglob("*.py"):
+        here = _subpackage(_module_name(path))
+        for mod, names, _ in _imports(path):
+            there = _subpackage(mod)
+            if there == here:
+                continue
+            private_module = any(part.startswith("_") for part in mod.split(".")[1:])
+            private_names = [n for n in names if n.startswith("_")]
+            if private_module or private_names:
+                offenders.append(f"{_module_name(path)}: from {mod} import {', '.join(names)}")
+    assert not offenders, "\n".join(offenders)
+
+
+def test_modules_stay_small():
+    big = {str(p.relative_to(LIB)): n for p in LIB.rglob("*.py") if (n := len(p.read_text().splitlines())) > 420}
+    assert not big, f"modules over ~400 lines: {big}"
