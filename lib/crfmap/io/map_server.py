@@ -284,7 +284,7 @@ def _resolve_save_options(grid, mode, occupied_thresh, free_thresh, image_format
 
 
 def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, free_thresh=None,
-             image_format=None):
+             image_format=None, saver="humble"):
     """Write ``grid`` as a map_server map, as nav2's map_saver does; returns (yaml_path, image_path).
 
     The image is ``<yaml stem>.<image_format>`` beside the YAML, named in it without a
@@ -306,6 +306,11 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
     A trinary map reloads to the same int8 values when ``free_thresh <= 0.196`` and
     ``occupied_thresh < 1`` (the loader's view of 254, 205 and 0).
 
+    ``saver``: ``"humble"`` writes the thresholds used into the YAML, as Humble's map_saver
+    does; ``"jazzy"`` writes a trinary YAML with 0.65 / 0.196 whatever thresholds classified
+    the cells, as map_saver does since Jazzy (navigation2 PR #5278): those are the thresholds
+    that read its pixels 0 / 205 / 254 back as occupied / unknown / free.
+
     >>> save_map(grid, "out/map.yaml", mode="scale")  # doctest: +SKIP
     (PosixPath('out/map.yaml'), PosixPath('out/map.png'))
     """
@@ -318,7 +323,11 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
                                                           image_format)
     image_path = yaml_path.with_suffix("." + image_format)
     grey, alpha = _pixels_from_occupancy(grid.to_int8(), mode, occ, free)
-    text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, occ, free)
+    if saver not in LOADERS:
+        raise InputError("saver", f"unknown map_saver {saver!r} (expected one of {', '.join(LOADERS)})")
+    yaml_occ, yaml_free = (OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT) if (
+        saver == "jazzy" and mode == "trinary") else (occ, free)
+    text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, yaml_occ, yaml_free)
     image_existed = image_path.exists()
     with atomic_path(image_path) as tmp:
         _write_image(tmp, grey, alpha, image_format)
