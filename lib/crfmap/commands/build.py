@@ -65,6 +65,26 @@ def add_bag_options(p):
                    help="the laser's pose on base_link [m, m, rad], overriding /tf_static")
 
 
+def add_ros2_bag_options(p):
+    """How a ROS 2 bag is written (``simulate`` and ``convert``)."""
+    p.add_argument("--storage", choices=["mcap", "sqlite3"], default=None,
+                   help="ROS 2 storage: mcap (default; rosbag2's default since Jazzy, Humble reads it with "
+                   "ros-humble-rosbag2-storage-mcap) or sqlite3 (Humble's default)")
+    p.add_argument("--distro", choices=["humble", "jazzy"], default=None,
+                   help="ROS 2 bag metadata: humble (default: version 8, read by Humble and every later "
+                   "rosbag2) or jazzy (version 9, as Jazzy records; Humble cannot read it)")
+
+
+def ros2_bag_kwargs(args, fmt):
+    """write_bag keywords from the ROS 2 bag options; they do not apply to ROS 1 bags."""
+    if fmt == "ros1":
+        for flag in ("storage", "distro"):
+            if getattr(args, flag, None) is not None:
+                raise InputError("--" + flag, "applies to ROS 2 bags only, not to ROS 1 .bag files")
+        return {}
+    return {"storage": args.storage or "mcap", "distro": args.distro or "humble"}
+
+
 def add_map_output_options(p):
     """How a map_server YAML output is written, and which nav2 loader judges it (shared with ``infer``)."""
     p.add_argument("--mode", default="trinary", choices=["trinary", "scale", "raw"],
