@@ -225,7 +225,12 @@ def test_default_trinary_output_is_lethal_exactly_where_crfmap_meant(tmp_path, l
     # the YAML is map_saver's (Jazzy+) and its pixels are map_saver's three
     text = (tmp_path / "m.yaml").read_text()
     assert "mode: trinary" in text and "occupied_thresh: 0.65\nfree_thresh: 0.196" in text
-    assert set(np.unique(np.asarray(Image.open(tmp_path / "m.pgm")))) <= {0, 205, 254}
+    grey = np.asarray(Image.open(tmp_path / "m.pgm")).astype(float)
+    assert set(np.unique(grey)) <= {0, 205, 254}
+    # ROS 1's map_server (image_loader.cpp) on the same pixels: occ = (255 - grey) / 255, strict thresholds
+    occ = (255 - grey) / 255.0
+    ros1 = np.where(occ > 0.65, 100, np.where(occ < 0.196, 0, -1))[::-1]
+    np.testing.assert_array_equal(ros1, load_map(tmp_path / "m.yaml", loader=loader).to_int8())
     # 0.6451 rounds to 65: lethal, as map_saver would make it from the published grid; 0.6449 is not
     assert static_layer_costs(load_map(tmp_path / "m.yaml", loader=loader).to_int8()[0, :3]).tolist() == [
         254, 255, 254]

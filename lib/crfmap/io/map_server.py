@@ -4,7 +4,8 @@ map_server maps
     A YAML file (``image, mode, resolution, origin [x, y, yaw], negate, occupied_thresh,
     free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads loads).
     Loading follows **nav2_map_server**'s ``map_io.cpp`` (``loadMapYaml`` +
-    ``loadMapFromFile``) value for value; saving follows its ``saveMapToFile``. Where ROS 1's
+    ``loadMapFromFile``) value for value, Jazzy+'s rules by default or Humble's
+    (:mod:`crfmap.io.nav2_loader`); saving follows its ``saveMapToFile``. Where ROS 1's
     ``map_server`` (``image_loader.cpp``, ``map_saver.cpp``) differs, the docstrings say so.
     A loaded grid holds the OccupancyGrid values the map server would publish, divided by
     100 (unknown, -1, becomes 0.5).
