@@ -157,3 +157,14 @@ def test_bad_storage_or_distro(tmp_path):
     with pytest.raises(InputError, match="--distro"):
         write_bag(make_recording(), tmp_path / "run", distro="iron")
     assert not (tmp_path / "run").exists()
+
+
+def test_ros1_bag_latches_tf_static_and_map(tmp_path):
+    from rosbags.rosbag1 import Reader as Reader1
+
+    write_bag(make_recording(), tmp_path / "b.bag", fmt="ros1")
+    with Reader1(tmp_path / "b.bag") as reader:
+        latching = {c.topic: c.ext.latching for c in reader.connections}
+    assert latching["/tf_static"] == latching["/map"] == 1
+    assert not latching["/scan"]
+    assert len(read_bag(tmp_path / "b.bag").scans) == 5

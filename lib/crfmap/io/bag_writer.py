@@ -10,7 +10,7 @@ truth). Reading them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`
 ROS 2 bags are written as ``ros2 bag record`` would: a folder ``NAME`` holding ``metadata.yaml``
 and one data file ``NAME_0.mcap`` (MCAP, the default storage since Jazzy) or ``NAME_0.db3``
 (sqlite3, Humble's default); ``/tf_static`` and ``/map`` are offered transient-local (latched), so a
-player's late subscriber still gets the laser mount and the map. Metadata: version 8 for
+player's late subscriber still gets the laser mount and the map (ROS 1 bags: latching=1). Metadata: version 8 for
 ``distro="humble"`` (default; offered QoS as a YAML string, which Humble's rosbag2 and every later
 one parse), version 9 for ``distro="jazzy"`` (QoS as a YAML list, which Humble cannot read).
 """
@@ -143,7 +143,10 @@ def _write_all(writer, messages, store, serialize, qos=False):
     connections = {}
     for ns, topic, msgtype, msg in messages:
         if topic not in connections:
-            extra = {"offered_qos_profiles": [offered_qos(topic)]} if qos else {}
+            if qos:
+                extra = {"offered_qos_profiles": [offered_qos(topic)]}
+            else:  # ROS 1: the connection header's latching flag, as rosbag record keeps it
+                extra = {"latching": 1} if topic in LATCHED_TOPICS else {}
             connections[topic] = writer.add_connection(topic, msgtype, typestore=store, **extra)
         writer.write(connections[topic], ns, serialize(msg, msgtype))
 
