@@ -29,7 +29,7 @@ def add_parser(sub):
                    help="infer only cells within CELLS of an observed cell; the rest stay unknown "
                    "(default: the whole grid, as the thesis; see crfmap.crf.lbp.near_known)")
     p.add_argument("--free-thresh", type=float, default=None,
-                   help="override a YAML input's free_thresh when loading (nav2's map_saver writes 0.25, "
+                   help="override a YAML input's free_thresh when loading (Humble's map_saver writes 0.25, "
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
     p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
     add_map_output_options(p)  # --mode, --save-occupied-thresh, --save-free-thresh, --loader
