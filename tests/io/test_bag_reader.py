@@ -133,7 +133,7 @@ def test_rewriting_replaces_and_leaves_no_temporaries(tmp_path):
 
 
 def test_read_accepts_the_db3_and_metadata_of_a_ros2_bag(tmp_path):
-    write_bag(make_recording(), tmp_path / "b", fmt="ros2")
+    write_bag(make_recording(), tmp_path / "b", fmt="ros2", storage="sqlite3")
     (db3,) = (tmp_path / "b").glob("*.db3")
     for p in (db3, tmp_path / "b" / "metadata.yaml"):
         assert len(read_bag(p).scans) == 5
@@ -214,7 +214,7 @@ def test_truncated_ros1_bag(tmp_path):
 
 
 def test_garbage_db3(tmp_path):
-    write_bag(make_recording(), tmp_path / "b", fmt="ros2")
+    write_bag(make_recording(), tmp_path / "b", fmt="ros2", storage="sqlite3")
     (db3,) = (tmp_path / "b").glob("*.db3")
     db3.write_bytes(b"this is not sqlite " * 200)
     with pytest.raises(InputError, match="cannot read the bag") as info:

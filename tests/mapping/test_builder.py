@@ -288,7 +288,8 @@ def test_build_command_writes_a_map(small_log, tmp_path, capsys, suffix):
     from crfmap.io.grid_files import load_grid
 
     out = tmp_path / f"map{suffix}"
-    assert main(["build", str(small_log), str(out), "--resolution", "0.1"]) == 0
+    scale = ["--mode", "scale"] if suffix == ".yaml" else []  # scale keeps P to a percent (trinary: tests/io/test_nav2.py)
+    assert main(["build", str(small_log), str(out), "--resolution", "0.1", *scale]) == 0
     line = capsys.readouterr().out.strip()
     assert "\n" not in line and "2 scans used" in line and str(out) in line
     grid = load_grid(out)

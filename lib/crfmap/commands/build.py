@@ -65,6 +65,71 @@ def add_bag_options(p):
                    help="the laser's pose on base_link [m, m, rad], overriding /tf_static")
 
 
+def add_ros2_bag_options(p):
+    """How a ROS 2 bag is written (``simulate`` and ``convert``)."""
+    p.add_argument("--storage", choices=["mcap", "sqlite3"], default=None,
+                   help="ROS 2 storage: mcap (default; rosbag2's default since Jazzy, Humble reads it with "
+                   "ros-humble-rosbag2-storage-mcap) or sqlite3 (Humble's default)")
+    p.add_argument("--distro", choices=["humble", "jazzy"], default=None,
+                   help="ROS 2 bag metadata: humble (default: version 8, read by Humble and every later "
+                   "rosbag2) or jazzy (version 9, as Jazzy records; Humble cannot read it)")
+
+
+def ros2_bag_kwargs(args, fmt):
+    """write_bag keywords from the ROS 2 bag options; they do not apply to ROS 1 bags."""
+    if fmt == "ros1":
+        for flag in ("storage", "distro"):
+            if getattr(args, flag, None) is not None:
+                raise InputError("--" + flag, "applies to ROS 2 bags only, not to ROS 1 .bag files")
+        return {}
+    return {"storage": args.storage or "mcap", "distro": args.distro or "humble"}
+
+
+def add_map_output_options(p):
+    """How a map_server YAML output is written, and which nav2 loader judges it (shared with ``infer``)."""
+    p.add_argument("--mode", default="trinary", choices=["trinary", "scale", "raw"],
+                   help="map_server mode of a YAML output. trinary (default): what nav2's map_saver writes, "
+                   "P >= 0.65 occupied, P <= 0.2 free, else unknown; nav2 and ROS 1 navigate on it. scale: "
+                   "keeps P to a percent with thresholds 1/0, NOT for navigation (nav2 sees almost no "
+                   "obstacles). Exact probabilities: write a .npy")
+    p.add_argument("--save-occupied-thresh", type=float, default=None, metavar="P",
+                   help="occupied_thresh of a YAML output (default: map_saver's 0.65; scale: 1)")
+    p.add_argument("--save-free-thresh", type=float, default=None, metavar="P",
+                   help="free_thresh of a YAML output (default: map_saver's 0.196; scale: 0)")
+    p.add_argument("--loader", default="jazzy", choices=["humble", "jazzy"],
+                   help="nav2 map loader whose rules read YAML maps: jazzy (Jazzy, Kilted, Rolling; default) "
+                   "or humble")
+
+
+def save_map_output(grid, out, args) -> str:
+    """Save ``grid`` to ``out`` with the map output options; returns what nav2 will see, as text.
+
+    A YAML output is loaded back with nav2's rules (``args.loader``) and judged by the
+    costmap static layer's defaults, so the counts are those of the written file.
+    """
+    from crfmap.io.grid_files import save_grid
+
+    if str(out).lower().endswith((".yaml", ".yml")):
+        from crfmap.io.map_server import load_map
+        from crfmap.io.nav2_costmap import describe_for_nav2
+
+        from crfmap.io.map_server import FREE_THRESH_DEFAULT, OCCUPIED_THRESH_DEFAULT
+
+        occ, free = args.save_occupied_thresh, args.save_free_thresh
+        if args.mode == "trinary":  # map_saver's thresholds, not those of a loaded input map
+            occ = OCCUPIED_THRESH_DEFAULT if occ is None else occ
+            free = FREE_THRESH_DEFAULT if free is None else free
+        save_grid(grid, out, mode=args.mode, occupied_thresh=occ, free_thresh=free, saver="jazzy")
+        seen = load_map(out, loader=args.loader).to_int8()
+        return f"{describe_for_nav2(seen)} ({args.loader} loader; P >= 0.65 in the grid: " \
+               f"{int((grid.probability >= 0.65).sum())})"
+    for flag in ("save_occupied_thresh", "save_free_thresh"):
+        if getattr(args, flag, None) is not None:
+            raise InputError("--" + flag.replace("_", "-"), "applies to map_server YAML outputs only, not .npy")
+    save_grid(grid, out)
+    return "exact probabilities (.npy, not a nav2 map)"
+
+
 def add_parser(sub):
     p = sub.add_parser(
         "build",
@@ -75,7 +140,7 @@ def add_parser(sub):
     )
     p.add_argument("input", help="ROS1 .bag, ROS2 bag folder (or its .db3 / metadata.yaml), "
                                  "or CARMEN log (.log / .log.gz)")
-    p.add_argument("output", help="map_server YAML (scale mode, keeps probabilities) or .npy")
+    p.add_argument("output", help="map_server YAML (trinary by default, see --mode) or .npy (exact P)")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
     p.add_argument("--model", choices=["arctan", "logodds"], default="arctan",
                    help="arctan: thesis eq. 16 (default); logodds: Probabilistic Robotics ch. 9")
@@ -85,12 +150,12 @@ def add_parser(sub):
     p.add_argument("--extent", type=float, nargs=4, default=None, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
                    help="area to map in metres (default: the data's bounding box)")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
+    add_map_output_options(p)
     return p
 
 
 def run(args: argparse.Namespace) -> int:
     from crfmap.mapping.builder import build_grid
-    from crfmap.io.grid_files import save_grid
 
     out = Path(args.output)
     if not str(out).lower().endswith(GRID_SUFFIXES):
@@ -100,11 +165,10 @@ def run(args: argparse.Namespace) -> int:
                          laser_mount=args.laser_mount)
     grid = build_grid(rec.scans, args.resolution, model=args.model, extent=args.extent,
                       free_on_no_return=args.free_on_no_return or False, progress=args.progress)
-    save_kw = {"mode": "scale"} if out.suffix.lower() in (".yaml", ".yml") else {}
-    save_grid(grid, out, **save_kw)
+    nav2_view = save_map_output(grid, out, args)
     seconds = time.perf_counter() - start
     dropped = rec.meta.get("scans_dropped", 0)
     print(f"{args.input}: {len(rec.scans)} scans used ({dropped} dropped), pose source "
           f"{rec.meta.get('pose_source', '?')}, {grid.width}x{grid.height} cells at {grid.resolution:g} m, "
-          f"{args.model}, {seconds:.2f} s -> {out}")
+          f"{args.model}, {seconds:.2f} s -> {out}: {nav2_view}")
     return 0

@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 
 from crfmap.errors import InputError
-from crfmap.commands.build import add_bag_options
+from crfmap.commands.build import add_bag_options, add_ros2_bag_options, ros2_bag_kwargs
 
 
 def add_parser(sub):
@@ -21,6 +21,7 @@ def add_parser(sub):
     p.add_argument("--format", choices=["ros2", "ros1"], default=None,
                    help="bag format (default: ros1 if OUT_BAG ends in .bag, else ros2)")
     add_bag_options(p)
+    add_ros2_bag_options(p)
     return p
 
 
@@ -39,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
                          laser_mount=args.laser_mount)
-    write_bag(rec, out, fmt=fmt)
+    write_bag(rec, out, fmt=fmt, **ros2_bag_kwargs(args, fmt))
     n_odom = len(rec.odometry) if rec.odometry is not None else 0
     print(f"{args.input}: {len(rec.scans)} scans, {n_odom} odometry poses -> {fmt} bag {out} "
           f"({time.perf_counter() - start:.2f} s)")

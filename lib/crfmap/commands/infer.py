@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from crfmap.errors import InputError
+from crfmap.commands.build import add_map_output_options, save_map_output
 
 
 def add_parser(sub):
@@ -14,7 +15,7 @@ def add_parser(sub):
         "Tables are 'oo,oe,eo,ee' (rows: cell occupied/empty; columns: neighbour occupied/empty).",
     )
     p.add_argument("input", help="map_server YAML or .npy grid of P(occupied)")
-    p.add_argument("output", help="map_server YAML (scale mode keeps probabilities) or .npy")
+    p.add_argument("output", help="map_server YAML (trinary by default, see --mode) or .npy (exact P)")
     p.add_argument("--hidden", default="10,1,1,10", help="hidden pairwise table oo,oe,eo,ee (default 10,1,1,10)")
     p.add_argument("--link", default="1,0,0,1", help="link table oo,oe,eo,ee (default 1,0,0,1)")
     p.add_argument("--schedule", default="checkerboard", choices=["checkerboard", "flooding", "sweep", "thesis"])
@@ -28,11 +29,10 @@ def add_parser(sub):
                    help="infer only cells within CELLS of an observed cell; the rest stay unknown "
                    "(default: the whole grid, as the thesis; see crfmap.crf.lbp.near_known)")
     p.add_argument("--free-thresh", type=float, default=None,
-                   help="override a YAML input's free_thresh when loading (nav2's map_saver writes 0.25, "
+                   help="override a YAML input's free_thresh when loading (Humble's map_saver writes 0.25, "
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
     p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
-    p.add_argument("--mode", default="scale", choices=["scale", "trinary"],
-                   help="map_server mode of a YAML output (scale keeps probabilities)")
+    add_map_output_options(p)  # --mode, --save-occupied-thresh, --save-free-thresh, --loader
     return p
 
 
@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from crfmap.crf.lbp import infer
-    from crfmap.io.grid_files import load_grid, save_grid
+    from crfmap.io.grid_files import load_grid
     from crfmap.io.map_server import load_map
     from crfmap.crf.potentials import check_table
 
@@ -49,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
     hidden = check_table(args.hidden, "--hidden")
     link = check_table(args.link, "--link")
     if str(args.input).lower().endswith((".yaml", ".yml")):
-        grid = load_map(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh)
+        grid = load_map(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh,
+                        loader=args.loader)
     else:
         grid = load_grid(args.input)
     region = None
@@ -63,8 +64,7 @@ def run(args: argparse.Namespace) -> int:
     if region is not None:  # outside the region nothing was inferred: keep the input there
         beliefs = np.where(region, result.beliefs.probability, grid.probability)
         result.beliefs = result.beliefs.with_probability(beliefs)
-    save_kw = {"mode": args.mode} if str(args.output).lower().endswith((".yaml", ".yml")) else {}
-    save_grid(result.beliefs, args.output, **save_kw)
+    nav2_view = save_map_output(result.beliefs, args.output, args)
     print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, "
-          f"{result.seconds:.3f} s -> {args.output}")
+          f"{result.seconds:.3f} s -> {args.output}: {nav2_view}")
     return 0

@@ -55,6 +55,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="cell size of the scene [m] (default 0.1; office 0.05)")
     p.add_argument("--legacy-no-return", action="store_true",
                    help="report beams that hit nothing as -1 (the thesis) instead of +inf (REP 117)")
+    from crfmap.commands.build import add_ros2_bag_options
+
+    add_ros2_bag_options(p)
     p.add_argument("--overwrite", action="store_true", help="replace OUT_BAG if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     return p
@@ -94,14 +97,17 @@ def build_recording(args):
 
 
 def run(args) -> int:
+    from crfmap.commands.build import ros2_bag_kwargs
+
     out = Path(args.out)
+    bag_kwargs = ros2_bag_kwargs(args, args.format)
     if out.exists() and not args.overwrite:
         raise InputError(out, "already exists; pass --overwrite to replace it")
     started = time.perf_counter()
     recording = build_recording(args)
     from crfmap.io.bag_reader import write_bag
 
-    write_bag(recording, out, fmt=args.format)
+    write_bag(recording, out, fmt=args.format, **bag_kwargs)
     if not args.quiet:
         scans = recording.scans
         print(f"wrote {out} ({args.format}): {args.scene}, mode {recording.meta['mode']}, {len(scans)} scans x "

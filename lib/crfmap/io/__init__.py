@@ -7,6 +7,8 @@ Public API (imported on first use, so ``import crfmap.io`` stays cheap):
 - :mod:`crfmap.io.carmen`: ``read_carmen``
 - :mod:`crfmap.io.map_server`: ``load_map``, ``save_map``, ``read_map_yaml``, ``map_yaml_text``
 - :mod:`crfmap.io.grid_files`: ``load_grid``, ``save_grid`` (by suffix)
+- :mod:`crfmap.io.nav2_loader`: nav2's per-pixel map loading rules (Humble, Jazzy+)
+- :mod:`crfmap.io.nav2_costmap`: ``nav2_counts``, ``static_layer_costs`` (what nav2's costmap makes of a map)
 - :mod:`crfmap.io.npy_grid`: ``load_npy``, ``save_npy``, ``npy_sidecar_path``
 - :mod:`crfmap.io.atomic`: ``atomic_path``, ``atomic_dir``
 """
@@ -27,6 +29,8 @@ _API = {
     "load_npy": "npy_grid",
     "save_npy": "npy_grid",
     "npy_sidecar_path": "npy_grid",
+    "nav2_counts": "nav2_costmap",
+    "static_layer_costs": "nav2_costmap",
     "atomic_path": "atomic",
     "atomic_dir": "atomic",
 }

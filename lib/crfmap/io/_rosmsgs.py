@@ -53,8 +53,10 @@ def grid_from_message(msg, source, topic):
         raise InputError(source, f"{topic}: {data.size} cells for a {info.width} x {info.height} grid")
     resolution = float(str(np.float32(info.resolution)))  # undo the float32 of MapMetaData: 0.05, not 0.0500000007
     try:
-        return OccupancyGrid.from_int8(data.reshape(int(info.height), int(info.width)), resolution=resolution,
-                                       origin=pose_of(info.origin), frame_id=msg.header.frame_id or "map")
+        from crfmap.io.map_server import grid_from_values  # 50 stays a known 50
+
+        return grid_from_values(data.reshape(int(info.height), int(info.width)), resolution=resolution,
+                                origin=pose_of(info.origin), frame_id=msg.header.frame_id or "map")
     except InputError as exc:
         raise InputError(source, f"{topic}: {exc.problem}") from None
 

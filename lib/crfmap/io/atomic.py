@@ -22,6 +22,7 @@ def atomic_path(path):
     os.close(fd)
     try:
         yield Path(tmp)
+        _set_new_file_mode(tmp, path)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -40,9 +41,47 @@ def atomic_dir(path):
     tmp.rmdir()  # writers such as rosbags' refuse an existing folder
     try:
         yield tmp
+        _set_new_file_mode(tmp, path, folder=True)
         if path.exists():
             shutil.rmtree(path)
         os.replace(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+# --- permissions: what open()/mkdir() would give, not mkstemp's 0600 --------------------------
+def current_umask() -> int:
+    """The process umask (read from /proc where possible: setting it to probe is not thread-safe).
+
+    >>> 0 <= current_umask() <= 0o777
+    True
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _set_new_file_mode(tmp, path, folder=False):
+    """Give ``tmp`` the mode ``path`` has (when replacing it), else 0666 (folders 0777) minus the umask.
+
+    map_saver, numpy and rosbag2 create files with plain open()/mkdir(), i.e. this mode;
+    mkstemp/mkdtemp's private 0600/0700 would hide maps and figures from other users and services.
+    """
+    tmp = Path(tmp)
+    if not tmp.exists():
+        return
+    try:
+        mode = os.stat(path).st_mode & 0o7777 if Path(path).is_dir() == folder else None
+    except OSError:
+        mode = None
+    if mode is None:
+        mode = (0o777 if folder else 0o666) & ~current_umask()
+    os.chmod(tmp, mode)

@@ -51,9 +51,11 @@ def _bag_location(path: Path):
     if path.suffix == ".bag":
         return path, "ros1"
     if path.name == "metadata.yaml" or path.suffix in (".db3", ".mcap"):
-        if not (path.parent / "metadata.yaml").exists():
-            raise InputError(path, "no metadata.yaml beside it: not part of a ROS2 bag folder")
-        return path.parent, "ros2"
+        if (path.parent / "metadata.yaml").exists():
+            return path.parent, "ros2"
+        if path.suffix in (".db3", ".mcap"):  # a bare storage file: its own metadata is enough
+            return path, "ros2"
+        raise InputError(path, "no metadata.yaml beside it: not part of a ROS2 bag folder")
     raise InputError(path, "not a ROS bag (expected a ROS1 .bag file or a ROS2 bag folder)")
 
 

@@ -6,6 +6,13 @@ with twist), ``/cmd_vel`` (geometry_msgs/Twist), ``/tf`` (map -> odom and odom -
 ``/tf_static`` (base_link -> laser), and, when known, ``/ground_truth_pose``
 (geometry_msgs/PoseStamped, base_link in map) and ``/map`` (nav_msgs/OccupancyGrid of the ground
 truth). Reading them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`` is importable from there too).
+
+ROS 2 bags are written as ``ros2 bag record`` would: a folder ``NAME`` holding ``metadata.yaml``
+and one data file ``NAME_0.mcap`` (MCAP, the default storage since Jazzy) or ``NAME_0.db3``
+(sqlite3, Humble's default); ``/tf_static`` and ``/map`` are offered transient-local (latched), so a
+player's late subscriber still gets the laser mount and the map (ROS 1 bags: latching=1). Metadata: version 8 for
+``distro="humble"`` (default; offered QoS as a YAML string, which Humble's rosbag2 and every later
+one parse), version 9 for ``distro="jazzy"`` (QoS as a YAML list, which Humble cannot read).
 """
 from __future__ import annotations
 
@@ -50,7 +57,22 @@ def _check_recording(recording, name):
     return scans
 
 
-def write_bag(recording, path, fmt="ros2"):
+STORAGES = ("mcap", "sqlite3")
+DISTROS = {"humble": 8, "jazzy": 9}  # the rosbag2 metadata version each writes
+LATCHED_TOPICS = (TF_STATIC_TOPIC, MAP_TOPIC)
+
+
+def offered_qos(topic):
+    """The QoS profile crfmap offers ``topic`` with: reliable, keep-last; latched topics transient-local, depth 1."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    latched = topic in LATCHED_TOPICS
+    return Qos(QosHistory.KEEP_LAST, 1 if latched else 10, QosReliability.RELIABLE,
+               QosDurability.TRANSIENT_LOCAL if latched else QosDurability.VOLATILE, QosTime(0, 0),
+               QosTime(0, 0), QosLiveliness.AUTOMATIC, QosTime(0, 0), False)
+
+
+def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
     """Write a :class:`~crfmap.recording.Recording` as a ROS2 bag folder or a ROS1 ``.bag`` file.
 
     Parameters
@@ -59,6 +81,10 @@ def write_bag(recording, path, fmt="ros2"):
     path : str or Path
         ROS2: a folder (created; replaced if present). ROS1: a file ending in ``.bag``.
     fmt : {'ros2', 'ros1'}
+    storage : {'mcap', 'sqlite3'}
+        ROS2 storage plugin (data file ``NAME_0.mcap`` or ``NAME_0.db3``).
+    distro : {'humble', 'jazzy'}
+        ROS2 metadata: version 8, read by Humble and later (default), or version 9 (Jazzy's own).
 
     Notes
     -----
@@ -80,17 +106,29 @@ def write_bag(recording, path, fmt="ros2"):
         raise InputError(path, "a ROS1 bag file must end in .bag (readers tell ROS1 from ROS2 by it)")
     if fmt == "ros2" and path.suffix == ".bag":
         raise InputError(path, "a ROS2 bag is a folder; a name ending in .bag would be taken for a ROS1 bag")
+    if storage not in STORAGES:
+        raise InputError("--storage", f"expected one of {', '.join(STORAGES)}, got {storage!r}")
+    if distro not in DISTROS:
+        raise InputError("--distro", f"expected one of {', '.join(DISTROS)}, got {distro!r}")
     scans = _check_recording(recording, path)
     store = typestore(fmt)
     make = MessageFactory(store, ros1=(fmt == "ros1"))
     messages = _recording_messages(recording, scans, make)  # [(ns, topic, msgtype, msg)]
     messages.sort(key=lambda m: m[0])  # stable: equal stamps keep their order
     if fmt == "ros2":
-        from rosbags.rosbag2 import Writer
+        from rosbags.rosbag2 import StoragePlugin, Writer
 
+        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
         with atomic_dir(path) as tmp:
-            with Writer(tmp, version=Writer.VERSION_LATEST) as writer:
-                _write_all(writer, messages, store, store.serialize_cdr)
+            # rosbags names the data file after its folder: write in tmp/NAME_0, then move the
+            # files up, so that the bag folder NAME holds NAME_0.mcap as rosbag2 names it.
+            tmp.mkdir()
+            inner = tmp / f"{path.name}_0"
+            with Writer(inner, version=DISTROS[distro], storage_plugin=plugin) as writer:
+                _write_all(writer, messages, store, store.serialize_cdr, qos=True)
+            for item in inner.iterdir():
+                item.rename(tmp / item.name)
+            inner.rmdir()
     else:
         from rosbags.rosbag1 import Writer
 
@@ -101,11 +139,15 @@ def write_bag(recording, path, fmt="ros2"):
     return path
 
 
-def _write_all(writer, messages, store, serialize):
+def _write_all(writer, messages, store, serialize, qos=False):
     connections = {}
     for ns, topic, msgtype, msg in messages:
         if topic not in connections:
-            connections[topic] = writer.add_connection(topic, msgtype, typestore=store)
+            if qos:
+                extra = {"offered_qos_profiles": [offered_qos(topic)]}
+            else:  # ROS 1: the connection header's latching flag, as rosbag record keeps it
+                extra = {"latching": 1} if topic in LATCHED_TOPICS else {}
+            connections[topic] = writer.add_connection(topic, msgtype, typestore=store, **extra)
         writer.write(connections[topic], ns, serialize(msg, msgtype))
 
 

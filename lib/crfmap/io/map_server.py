@@ -4,7 +4,8 @@ map_server maps
     A YAML file (``image, mode, resolution, origin [x, y, yaw], negate, occupied_thresh,
     free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads loads).
     Loading follows **nav2_map_server**'s ``map_io.cpp`` (``loadMapYaml`` +
-    ``loadMapFromFile``) value for value; saving follows its ``saveMapToFile``. Where ROS 1's
+    ``loadMapFromFile``) value for value, Jazzy+'s rules by default or Humble's
+    (:mod:`crfmap.io.nav2_loader`); saving follows its ``saveMapToFile``. Where ROS 1's
     ``map_server`` (``image_loader.cpp``, ``map_saver.cpp``) differs, the docstrings say so.
     A loaded grid holds the OccupancyGrid values the map server would publish, divided by
     100 (unknown, -1, becomes 0.5).
@@ -25,7 +26,7 @@ import re
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, UnidentifiedImageError
+from PIL import Image
 
 from crfmap.io._yaml import finite_number, format_number, read_mapping
 from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
@@ -33,6 +34,7 @@ from crfmap.io.atomic import atomic_path
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.io.npy_grid import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
+from crfmap.io.nav2_loader import DEFAULT_LOADER, LOADERS, occupancy, read_pixels
 
 MAP_MODES = ("trinary", "scale", "raw")
 MAP_SUFFIXES = (".yaml", ".yml")
@@ -41,16 +43,15 @@ IMAGE_FORMATS = ("pgm", "png")
 # Pixel values both map savers write in trinary mode.
 FREE_PIXEL, OCCUPIED_PIXEL, UNKNOWN_PIXEL = 254, 0, 205
 
-# Save defaults. occupied 0.65 is both savers' default. For free, nav2's map_saver uses 0.25,
-# but then its own loader reads the unknown pixel 205 (occ = 50/255 = 0.196) as *free*
-# (slam_toolbox issue #587, navigation2 PR #5138); ROS 1's map_saver writes 0.196, just
-# under 205's occ, so unknown stays unknown. We write 0.196.
+# Save defaults: map_saver's. occupied 0.65 everywhere. For free, Humble's map_saver writes its
+# threshold (default 0.25), under which its own loader reads the unknown pixel 205
+# (occ = 50/255 = 0.196) as *free* (slam_toolbox issue #587); since Jazzy (navigation2 PR #5278)
+# a trinary YAML always says 0.65 / 0.196, as ROS 1's map_saver does: 205 stays unknown.
 OCCUPIED_THRESH_DEFAULT = 0.65
 FREE_THRESH_DEFAULT = 0.196
 # Scale mode with thresholds 0 and 1 makes nav2's grey image lossless: occ = value / 100.
 SCALE_THRESHOLDS = (1.0, 0.0)  # (occupied, free)
 
-_QUANTUM_MAX = 65535.0  # nav2 reads images with GraphicsMagick at 16 bits per channel (Q16)
 _REQUIRED_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh")
 _PNM_SEP = rb"(?:\s|#[^\n]*\n)+"
 _PNM_HEADER = re.compile(rb"\A(P[1-6])" + _PNM_SEP + rb"(\d+)" + _PNM_SEP + rb"(\d+)")
@@ -105,6 +106,8 @@ def read_map_yaml(yaml_path) -> dict:
     free = finite_number(doc["free_thresh"], path, "free_thresh")
     _check_thresholds(occupied, free, path)
     mode = doc.get("mode", "trinary")
+    if isinstance(mode, (str, int, float)) and not isinstance(mode, bool):
+        mode = str(mode).lower()  # nav2 and ROS 1 lower-case it: "Trinary" is trinary
     if mode not in MAP_MODES:
         raise InputError(path, f"unknown mode {mode!r} (expected one of {', '.join(MAP_MODES)})")
     image_path = Path(image) if Path(image).is_absolute() else path.parent / image
@@ -134,104 +137,26 @@ def _check_pnm_header(image_path, source, context):
                                      f"({expected} bytes) but the file holds {found} bytes{context}")
 
 
-def _read_pixels(image_path, context=""):
-    """Colour-channel sum and alpha of every pixel, as GraphicsMagick Q16 quanta (0..65535).
-
-    Returns ``(colour_sum[h, w], alpha[h, w] or None)``, top image row first; the colour sum
-    adds R, G and B (a grey pixel counts three times, as GraphicsMagick reads grey as R=G=B).
-    """
-    source = Path(image_path)
-    if not source.exists():
-        raise InputError(source, f"image file not found{context}")
-    if source.is_dir():
-        raise InputError(source, f"is a folder, expected an image file{context}")
-    if source.stat().st_size == 0:
-        raise InputError(source, f"empty image file (0 bytes){context}")
-    try:
-        _check_pnm_header(source, source, context)
-        with Image.open(source) as img:
-            img.load()
-            return _pixels_from_pil(img, source, context)
-    except InputError:
-        raise
-    except UnidentifiedImageError:
-        raise InputError(source, f"not an image Pillow can read{context}") from None
-    except Image.DecompressionBombError as exc:
-        raise InputError(source, f"image too large for Pillow's safety limit ({exc}){context}") from None
-    except (OSError, SyntaxError, ValueError) as exc:  # Pillow's "image file is truncated", bad data
-        raise InputError(source, f"unreadable image ({exc}){context}") from None
-
-
-def _pixels_from_pil(img, source, context):
-    if img.width == 0 or img.height == 0:
-        raise InputError(source, f"empty image ({img.width} x {img.height} pixels){context}")
-    mode = img.mode
-    if mode in ("I", "I;16", "I;16B", "I;16L", "I;16N"):  # 16-bit grey
-        grey = np.asarray(img).astype(np.float64)
-        if grey.min() < 0 or grey.max() > _QUANTUM_MAX:
-            raise InputError(source, f"integer image values outside 0..65535 are not supported{context}")
-        return 3.0 * grey, None
-    if mode == "1":
-        img = img.convert("L")
-    elif mode == "P":
-        img = img.convert("RGBA" if "transparency" in img.info else "RGB")
-    elif mode not in ("L", "LA", "RGB", "RGBA"):
-        img = img.convert("RGBA" if "A" in img.getbands() else "RGB")
-    px = np.asarray(img).astype(np.float64) * 257.0  # 8 bits -> 16-bit quanta, exactly
-    if img.mode == "L":
-        return 3.0 * px, None
-    if img.mode == "LA":
-        return 3.0 * px[..., 0], px[..., 1]
-    colour = px[..., 0] + px[..., 1] + px[..., 2]
-    return colour, (px[..., 3] if img.mode == "RGBA" else None)
-
-
-def _occupancy_from_pixels(colour_sum, alpha, mode, negate, occupied_thresh, free_thresh):
-    """nav2's per-pixel rule, vectorised; int8 values in image row order (top row first).
-
-    In trinary mode alpha (opacity) is averaged in with R, G, B, as nav2 and ROS 1 both do
-    "to preserve existing behaviour"; in scale mode a pixel that is not fully opaque is
-    unknown; raw mode ignores ``negate`` (nav2; ROS 1 applies it and wraps values > 127).
-    """
-    if mode == "trinary" and alpha is not None:
-        shade = (colour_sum + alpha) / 4.0 / _QUANTUM_MAX
-    else:
-        shade = colour_sum / 3.0 / _QUANTUM_MAX
-    if mode == "raw":
-        percent = np.floor(shade * 255.0 + 0.5)  # std::round, for non-negative values
-        return np.where((percent >= 0) & (percent <= 100), percent, -1).astype(np.int8)
-    occ = shade if negate else 1.0 - shade
-    out = np.full(occ.shape, -1, dtype=np.int8)
-    if mode == "scale":
-        # ROS 1 differs here: thresholds first, only alpha == 0 unknown, value 1 + 98*ratio truncated.
-        ratio = (occ - free_thresh) / (occupied_thresh - free_thresh)
-        out[...] = np.rint(np.clip(ratio, 0.0, 1.0) * 100.0).astype(np.int8)
-    out[occ < free_thresh] = 0
-    out[occupied_thresh < occ] = 100
-    if mode == "scale" and alpha is not None:
-        out[alpha != _QUANTUM_MAX] = -1
-    return out
-
-
-def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None) -> OccupancyGrid:
+def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAULT_LOADER) -> OccupancyGrid:
     """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
 
-    Per pixel: ``shade`` = mean of R, G, B (and alpha, in trinary mode, if the image has
-    one) in [0, 1]; ``occ = shade`` if ``negate`` else ``1 - shade``. Trinary:
-    ``occ > occupied_thresh`` -> 100, ``occ < free_thresh`` -> 0, else -1. Scale: not fully
-    opaque -> -1, else as trinary but values in between become
-    ``rint((occ - free) / (occupied - free) * 100)`` (ROS 1: ``1 + 98 * ratio``, truncated).
-    Raw: ``round(shade * 255)`` if in 0..100, else -1 (nav2 ignores ``negate`` there).
-    The top image row is the highest y (row flip); cell (0, 0) sits at ``origin``.
+    ``loader``: ``"jazzy"`` (default: Jazzy, Kilted, Rolling) or ``"humble"``; their per-pixel
+    rules differ (luma vs channel mean, ``>=`` vs ``>``, alpha handling, float32): see
+    :mod:`crfmap.io.nav2_loader`. Roughly: ``occ = 1 - brightness`` (``brightness`` if
+    ``negate``); trinary: occupied above ``occupied_thresh`` -> 100, below ``free_thresh``
+    -> 0, else -1; scale puts ``round((occ - free) / (occupied - free) * 100)`` in between;
+    raw takes the grey level as the value. The top image row is the highest y (row flip);
+    cell (0, 0) sits at ``origin``. A value of 50 loads as P just above 0.5, so that it
+    stays a known 50 (crfmap's P = 0.5 means unknown).
 
     ``occupied_thresh`` / ``free_thresh`` override the file's thresholds (loading only;
     ``grid.meta`` keeps the file's values). Example: maps written by nav2 carry
     ``free_thresh: 0.25``, under which their unknown pixels (205) load as free, as in nav2;
-    ``free_thresh=0.196`` (ROS 1's value) keeps them unknown.
+    ``free_thresh=0.196`` (map_saver's value since Jazzy, and ROS 1's) keeps them unknown.
 
     ``grid.meta`` holds ``image, mode, negate, occupied_thresh, free_thresh`` as the YAML
-    states them, plus ``source`` (the YAML path), ``image_path`` and any extra YAML keys,
-    so that :func:`save_map` can write the same kind of map back.
+    states them, plus ``source`` (the YAML path), ``image_path``, ``loader`` and any extra
+    YAML keys, so that :func:`save_map` can write the same kind of map back.
 
     Raises :class:`InputError` naming the file for a missing/unparsable YAML, a missing
     or ill-typed key, an unknown mode, and a missing, unreadable, truncated or empty image.
@@ -240,18 +165,33 @@ def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None) -> OccupancyG
     >>> grid.to_int8()[0, :3]                # doctest: +SKIP
     array([-1, -1,  0], dtype=int8)
     """
+    if loader not in LOADERS:
+        raise InputError("--loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
     params = read_map_yaml(yaml_path)
     occ_t = params["occupied_thresh"] if occupied_thresh is None else float(occupied_thresh)
     free_t = params["free_thresh"] if free_thresh is None else float(free_thresh)
     if occupied_thresh is not None or free_thresh is not None:
         _check_thresholds(occ_t, free_t, "load_map thresholds")
-    colour, alpha = _read_pixels(params["image_path"], f" (the image of {Path(yaml_path)})")
-    values = _occupancy_from_pixels(colour, alpha, params["mode"], params["negate"], occ_t, free_t)
+    pixels = read_pixels(params["image_path"], f" (the image of {Path(yaml_path)})", _check_pnm_header)
+    values = occupancy(pixels, params["mode"], params["negate"], occ_t, free_t, loader=loader)
     meta = dict(params["extra"])
     meta.update({key: params[key] for key in ("image", "mode", "negate", "occupied_thresh", "free_thresh")})
-    meta.update(source=str(yaml_path), image_path=str(params["image_path"]))
-    return OccupancyGrid.from_int8(values[::-1], resolution=params["resolution"],
-                                   origin=params["origin"], frame_id="map", meta=meta)
+    meta.update(source=str(yaml_path), image_path=str(params["image_path"]), loader=loader)
+    return grid_from_values(values[::-1], resolution=params["resolution"], origin=params["origin"],
+                            frame_id="map", meta=meta)
+
+
+def grid_from_values(values, **grid_kwargs) -> OccupancyGrid:
+    """OccupancyGrid of int8 OccupancyGrid data [y, x]; 50 becomes P = nextafter(0.5, 1), a known 50.
+
+    >>> grid_from_values(np.array([[50, -1]], np.int8)).to_int8().tolist()
+    [[50, -1]]
+    """
+    grid = OccupancyGrid.from_int8(values, **grid_kwargs)
+    fifty = np.asarray(values) == 50
+    if fifty.any():
+        grid = grid.with_probability(np.where(fifty, np.nextafter(0.5, 1.0), grid.probability))
+    return grid
 
 
 # --- writing ------------------------------------------------------------------------------
@@ -345,7 +285,7 @@ def _resolve_save_options(grid, mode, occupied_thresh, free_thresh, image_format
 
 
 def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, free_thresh=None,
-             image_format=None):
+             image_format=None, saver="humble"):
     """Write ``grid`` as a map_server map, as nav2's map_saver does; returns (yaml_path, image_path).
 
     The image is ``<yaml stem>.<image_format>`` beside the YAML, named in it without a
@@ -367,6 +307,11 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
     A trinary map reloads to the same int8 values when ``free_thresh <= 0.196`` and
     ``occupied_thresh < 1`` (the loader's view of 254, 205 and 0).
 
+    ``saver``: ``"humble"`` writes the thresholds used into the YAML, as Humble's map_saver
+    does; ``"jazzy"`` writes a trinary YAML with 0.65 / 0.196 whatever thresholds classified
+    the cells, as map_saver does since Jazzy (navigation2 PR #5278): those are the thresholds
+    that read its pixels 0 / 205 / 254 back as occupied / unknown / free.
+
     >>> save_map(grid, "out/map.yaml", mode="scale")  # doctest: +SKIP
     (PosixPath('out/map.yaml'), PosixPath('out/map.png'))
     """
@@ -379,7 +324,11 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
                                                           image_format)
     image_path = yaml_path.with_suffix("." + image_format)
     grey, alpha = _pixels_from_occupancy(grid.to_int8(), mode, occ, free)
-    text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, occ, free)
+    if saver not in LOADERS:
+        raise InputError("saver", f"unknown map_saver {saver!r} (expected one of {', '.join(LOADERS)})")
+    yaml_occ, yaml_free = (OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT) if (
+        saver == "jazzy" and mode == "trinary") else (occ, free)
+    text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, yaml_occ, yaml_free)
     image_existed = image_path.exists()
     with atomic_path(image_path) as tmp:
         _write_image(tmp, grey, alpha, image_format)
@@ -396,5 +345,5 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
 
 __all__ = [
     "MAP_MODES", "OCCUPIED_THRESH_DEFAULT", "FREE_THRESH_DEFAULT", "read_map_yaml", "load_map",
-    "save_map", "map_yaml_text", 
+    "save_map", "map_yaml_text", "grid_from_values", "LOADERS", "DEFAULT_LOADER",
 ]

@@ -1,0 +1,59 @@
+"""The command line's ROS-facing options: map modes and what nav2 sees (build), bag storage and distro (simulate, convert)."""
+import numpy as np
+import pytest
+import yaml
+
+from crfmap.cli import main
+from crfmap.io.map_server import load_map
+from crfmap.io.nav2_costmap import nav2_counts
+
+CARMEN_LINES = [
+    "PARAM robot_frontlaser_offset 0.0 nohost 0",
+    "FLASER 5 1.0 1.1 9.0 1.2 1.3 0.0 0.0 0.0 0.0 0.0 0.0 1.0 host 1.0",
+    "FLASER 5 1.0 9.0 1.2 1.2 1.3 0.1 0.0 0.1 0.1 0.0 0.1 2.0 host 2.0",
+]
+
+
+@pytest.fixture
+def small_log(tmp_path):
+    path = tmp_path / "small.log"
+    path.write_text("\n".join(CARMEN_LINES) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("loader", ["humble", "jazzy"])
+def test_build_writes_a_trinary_map_and_says_what_nav2_sees(small_log, tmp_path, capsys, loader):
+    out = tmp_path / "map.yaml"
+    assert main(["build", str(small_log), str(out), "--resolution", "0.1", "--loader", loader]) == 0
+    line = capsys.readouterr().out.strip()
+    values = load_map(out, loader=loader).to_int8()
+    c = nav2_counts(values)
+    assert c["occupied"] > 0 and "\n" not in line
+    assert f"{c['occupied']} occupied, {c['free']} free, {c['unknown']} unknown cells under nav2's defaults" in line
+    assert yaml.safe_load(out.read_text())["mode"] == "trinary"
+    assert main(["build", str(small_log), str(tmp_path / "exact.npy"), "--resolution", "0.1"]) == 0
+    assert "not a nav2 map" in capsys.readouterr().out
+    p = np.load(tmp_path / "exact.npy")
+    assert c["occupied"] == (np.rint(p * 100) >= 65).sum()  # the .npy holds what the map was made of
+
+
+def test_build_scale_mode_and_save_thresholds(small_log, tmp_path, capsys):
+    out = tmp_path / "s.yaml"
+    assert main(["build", str(small_log), str(out), "--resolution", "0.1", "--mode", "scale",
+                 "--save-occupied-thresh", "0.65", "--save-free-thresh", "0.196"]) == 0
+    doc = yaml.safe_load(out.read_text())
+    assert (doc["mode"], doc["occupied_thresh"], doc["free_thresh"]) == ("scale", 0.65, 0.196)
+    assert main(["build", str(small_log), str(tmp_path / "bad.yaml"), "--save-free-thresh", "0.9"]) == 2
+    assert "free_thresh" in capsys.readouterr().err
+
+
+def test_simulate_sqlite3_jazzy_and_ros1_refuses_storage(tmp_path, capsys):
+    out = tmp_path / "sim"
+    assert main(["simulate", "x", str(out), "--storage", "sqlite3", "--distro", "jazzy", "--mode", "look",
+                 "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["metadata.yaml", "sim_0.db3"]
+    assert yaml.safe_load((out / "metadata.yaml").read_text())["rosbag2_bagfile_information"]["version"] == 9
+    assert main(["simulate", "x", str(tmp_path / "s.bag"), "--format", "ros1", "--storage", "mcap", "--quiet"]) == 2
+    assert "--storage" in capsys.readouterr().err
+    assert main(["convert", str(out), str(tmp_path / "conv")]) == 0
+    assert sorted(p.name for p in (tmp_path / "conv").iterdir()) == ["conv_0.mcap", "metadata.yaml"]
