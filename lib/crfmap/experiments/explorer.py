@@ -100,10 +100,8 @@ def _observe(scene, noise, seed):
     else:
         made = scenes.make_scene(scene)
     truth = made.truth
-    ox, oy, _ = truth.origin
-    extent = (ox, oy, ox + truth.width * truth.resolution, oy + truth.height * truth.resolution)
     recording = simulate(made, seed=seed, range_noise=noise, progress=False)
-    observed = build_grid(recording.scans, truth.resolution, extent=extent)
+    observed = build_grid(recording.scans, truth.resolution, bounds=truth.bounds())
     return Observation(made, observed, noise, "range C [m]", seed)
 
 
@@ -112,7 +110,7 @@ def observe(scene="x", noise=DEFAULT_NOISE, seed=0) -> Observation:
 
     ``"x"``: the UGM X with Gaussian image noise of sigma ``noise`` (:func:`crfmap.world.scenes.noisy_image`).
     Every other scene: the robot simulated in the scene's default mode with range noise
-    ``+-C``, C ~ U[0, ``noise``] [m], and the thesis's arctan grid built over the truth's extent.
+    ``+-C``, C ~ U[0, ``noise``] [m], and the thesis's arctan grid built over the truth's bounds.
     ``"office"`` is an 8 m x 6 m floor at 0.1 m whose layout is drawn from ``seed``.
     Results are cached (treat them as read-only).
 
@@ -196,7 +194,7 @@ def draw(ex: Exploration):
               f"\nMSE {ex.after.mse:.4f}")
     if ex.region is not None:
         axes[2].contour(ex.region.astype(float), levels=[0.5], colors="tab:red", linewidths=1.0,
-                        extent=truth.extent(), origin="lower")
+                        extent=truth.imshow_extent(), origin="lower")
         sx, sy = ex.observation.scene.start[:2]
         axes[2].plot([sx], [sy], marker="o", color="tab:red", markersize=4)
     curves = {}
