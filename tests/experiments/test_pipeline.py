@@ -21,7 +21,7 @@ def test_truth_bounds_rebuilds_the_same_cells():
 
 def test_exploring_with_perfect_sensors_sees_every_reachable_cell_correctly():
     scene = scenes.enclosed_boxes("train", size=20)
-    observed, recording = experiment.scan_scene(scene, Laser.with_fov(360, 90), mode="explore")
+    observed, recording = experiment.scan_scene(scene, Laser.with_fov(360, 90), drive="explore")
     assert observed.shape == scene.truth.shape and observed.origin == scene.truth.origin
     reach = scenes.reachable(scene.truth, scene.start)
     known = observed.probability != 0.5

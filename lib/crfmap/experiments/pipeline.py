@@ -17,7 +17,7 @@ sits on a plateau of the MSE (the beliefs are saturated), where the thesis's ste
 a local gradient both stall.
 
 >>> from crfmap.world.scenes import enclosed_boxes
->>> observed, recording = scan_scene(enclosed_boxes("train", size=20), mode="look", progress=False)
+>>> observed, recording = scan_scene(enclosed_boxes("train", size=20), drive="look", progress=False)
 >>> observed.shape, recording.scans.ranges.shape
 ((20, 20), (1, 360))
 """
@@ -59,7 +59,7 @@ def truth_bounds(truth: OccupancyGrid) -> tuple:
     return truth.bounds()
 
 
-def scan_scene(scene: Scene, laser=None, mode=None, *, model="arctan", seed=0, progress=False,
+def scan_scene(scene: Scene, laser=None, drive=None, *, model="arctan", seed=0, progress=False,
                **simulate_options) -> tuple:
     """Simulate the robot scanning ``scene`` and build the grid over the truth's cells.
 
@@ -67,11 +67,12 @@ def scan_scene(scene: Scene, laser=None, mode=None, *, model="arctan", seed=0, p
     ----------
     scene : crfmap.world.scenes.Scene
     laser : crfmap.sim.simulator.Laser or None (the simulator's default: 360 beams, 5 m)
-    mode : "look", "explore", "waypoints" or None (``scene.default_mode``)
+    drive : a drive of :mod:`crfmap.sim.drives` (``Look(turns=2)``), a mode name "look", "explore",
+        "waypoints" (that drive with its defaults) or None (``scene.default_mode``)
     model : "arctan" (thesis eq. 16) or "logodds"
     seed : int, passed to the simulator (only matters with noise)
     simulate_options : more keyword arguments of :func:`crfmap.sim.simulator.simulate`, e.g.
-        ``range_noise``, ``odometry_noise``, ``turns``; none means perfect sensors (the thesis)
+        ``range_noise``, ``odometry_noise``; none means perfect sensors (the thesis)
 
     Returns
     -------
@@ -83,7 +84,7 @@ def scan_scene(scene: Scene, laser=None, mode=None, *, model="arctan", seed=0, p
 
     if not isinstance(scene, Scene):
         raise InputError("scene", f"expected a crfmap.world.scenes.Scene, got {type(scene).__name__}")
-    recording: Recording = simulate(scene, laser, mode, seed=seed, progress=progress, **simulate_options)
+    recording: Recording = simulate(scene, laser, drive, seed=seed, progress=progress, **simulate_options)
     truth = scene.truth
     observed = build_grid(recording.scans, truth.resolution, model=model, bounds=truth_bounds(truth),
                           progress=progress)
