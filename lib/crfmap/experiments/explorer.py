@@ -18,12 +18,12 @@ True
 from __future__ import annotations
 
 import io
-import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 
+from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.lbp import SCHEDULES, LBPResult, disc_region, infer
@@ -73,16 +73,11 @@ def _check_scene(scene):
 
 
 def _check_noise(noise):
-    if isinstance(noise, bool) or not isinstance(noise, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(noise) or noise < 0:
-        raise InputError("noise", f"must be a non-negative number, got {noise!r}")
-    return float(noise)
+    return check_number("noise", noise, low=0.0)
 
 
 def _check_seed(seed):
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError("seed", f"must be a non-negative integer, got {seed!r}")
-    return int(seed)
+    return check_int("seed", seed, low=0)
 
 
 @lru_cache(maxsize=32)
@@ -124,18 +119,13 @@ def observe(scene="x", noise=DEFAULT_NOISE, seed=0) -> Observation:
 def _check_iterations(iterations):
     if iterations is None:
         return TO_CONVERGENCE
-    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
-        raise InputError("iterations", f"must be a non-negative integer or None (to convergence), got {iterations!r}")
-    return int(iterations)
+    return check_int("iterations", iterations, low=0)
 
 
 def _check_radius(radius):
     if radius is None:
         return None
-    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(radius) or radius <= 0:
-        raise InputError("radius", f"must be a positive number of metres or None (unbounded), got {radius!r}")
-    return float(radius)
+    return check_positive("radius", radius)
 
 
 def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.mapping.builder import build_grid
+from crfmap.checks import check_pair
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.lbp import LBPResult, infer
@@ -120,17 +121,9 @@ class PipelineResult:
         return fpr, tpr, self.metrics.auc
 
 
-def _check_pair(observed, truth):
-    for name, grid in (("observed", observed), ("truth", truth)):
-        if not isinstance(grid, OccupancyGrid):
-            raise InputError(name, f"expected an OccupancyGrid, got {type(grid).__name__}")
-    if observed.shape != truth.shape:
-        raise InputError("truth", f"shape {truth.shape} does not match the observed grid's {observed.shape}")
-
-
 def score(grid: OccupancyGrid, truth: OccupancyGrid) -> PipelineResult:
     """Score a grid as it is (the "before LBP" row)."""
-    _check_pair(grid, truth)
+    check_pair(grid, truth, grids_only=True)
     return PipelineResult(grid, evaluate(grid, truth))
 
 
@@ -146,7 +139,7 @@ def evaluate_pipeline(observed: OccupancyGrid, truth: OccupancyGrid, hidden=DEFA
     >>> r.metrics.recall, r.lbp.converged
     (1.0, True)
     """
-    _check_pair(observed, truth)
+    check_pair(observed, truth, grids_only=True)
     hidden = check_table(hidden, "hidden")
     link = check_table(link, "link")
     options = dict(TO_CONVERGENCE if lbp_options is None else lbp_options)
@@ -165,7 +158,7 @@ def search_tables(observed, truth, strengths=SEARCH_STRENGTHS, biases=SEARCH_BIA
     >>> table.shape
     (2, 2)
     """
-    _check_pair(observed, truth)
+    check_pair(observed, truth, grids_only=True)
     strengths = [float(a) for a in strengths]
     biases = [float(b) for b in biases]
     if not strengths or not biases or min(strengths) <= 0 or min(biases) <= 0:
@@ -244,7 +237,7 @@ def train_and_test(train: tuple, test: tuple, learners: dict, lbp_settings=None,
     for env, pair in grids.items():
         if not (isinstance(pair, tuple) and len(pair) == 2):
             raise InputError(env, "expected a pair (observed grid, truth grid)")
-        _check_pair(*pair)
+        check_pair(*pair, grids_only=True)
     if not learners:
         raise InputError("learners", "give at least one learner")
     out = TrainTest(observed={k: v[0] for k, v in grids.items()}, truth={k: v[1] for k, v in grids.items()},
