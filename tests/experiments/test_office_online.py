@@ -1,0 +1,68 @@
+"""Notebook 07's online helpers: snapshots equal the builder on the scans so far, numbers follow the updates."""
+import numpy as np
+import pytest
+
+from crfmap.experiments.office_online import map_online, online_numbers
+from crfmap.grid import UNKNOWN
+from crfmap.mapping.builder import build_grid
+from crfmap.mapping.online import OnlineMapper
+from crfmap.recording import ScanSet
+
+
+def room_scans(n=10, beams=41, seed=1):
+    """Scans in a 4 m x 3 m box room, ranges cast analytically to its walls."""
+    rng = np.random.default_rng(seed)
+    angles = np.linspace(-np.pi / 2, np.pi / 2, beams)
+    poses = np.column_stack([rng.uniform(0.8, 3.2, n), rng.uniform(0.8, 2.2, n), rng.uniform(-np.pi, np.pi, n)])
+    a = poses[:, 2:3] + angles
+    c, s = np.cos(a), np.sin(a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tx = np.where(c > 0, (4.0 - poses[:, :1]) / c, np.where(c < 0, -poses[:, :1] / c, np.inf))
+        ty = np.where(s > 0, (3.0 - poses[:, 1:2]) / s, np.where(s < 0, -poses[:, 1:2] / s, np.inf))
+    ranges = np.minimum(tx, ty).astype(np.float32)
+    return ScanSet(ranges, float(angles[0]), float(angles[1] - angles[0]), 0.05, 8.0, poses,
+                   0.5 * np.arange(n), source="room")
+
+
+def test_snapshots_are_the_grids_of_the_scans_so_far():
+    scans = room_scans()
+    mapper = OnlineMapper.for_scans(scans, 0.1, radius=1.5, max_iter=4)
+    run = map_online(mapper, scans, snapshot_at=[3, 7])
+    assert sorted(run.snapshots) == [3, 7, 10] and len(run.updates) == 10 and run.busy_seconds > 0
+    bounds = mapper.observations().bounds()
+    for n, (observed, believed) in run.snapshots.items():
+        offline = build_grid(scans.head(n), 0.1, bounds=bounds)
+        np.testing.assert_array_equal(observed.probability, offline.probability)
+        assert believed.shape == observed.shape
+    assert np.array_equal(run.snapshots[10][1].probability, mapper.beliefs().probability)
+
+
+def test_numbers_follow_the_updates_and_the_last_snapshot():
+    scans = room_scans()
+    mapper = OnlineMapper.for_scans(scans, 0.1, radius=1.5, max_iter=4)
+    run = map_online(mapper, scans)
+    numbers = online_numbers(mapper, run, log_seconds=4.5)
+    seconds = np.array([u.seconds for u in run.updates])
+    assert numbers["ms_per_scan_median"] == pytest.approx(1e3 * np.median(seconds))
+    assert numbers["ms_per_scan_max"] == pytest.approx(1e3 * seconds.max())
+    assert numbers["real_time_factor"] == pytest.approx(4.5 / run.busy_seconds)
+    assert numbers["fraction_of_scans_settled"] == np.mean([u.converged for u in run.updates])
+    observed, believed = run.snapshots[10]
+    occupied = observed.probability > 0.5
+    assert numbers["observed_occupied_cells"] == occupied.sum() > 0
+    never = observed.probability == UNKNOWN
+    given = never & (np.abs(believed.probability - UNKNOWN) > 0.01)
+    assert numbers["never_observed_cells_given_a_state"] == given.sum()
+    assert 0.0 <= numbers["never_observed_fraction_made_occupied"] <= 1.0
+    assert (numbers["radius_m"], numbers["max_iter_per_scan"]) == (1.5, 4)
+
+
+def test_head_cuts_every_per_scan_field_alike():
+    scans = room_scans()
+    first = scans.head(4)
+    assert len(first) == 4 and first.laser_poses.shape == (4, 3) and first.stamps.tolist() == [0.0, 0.5, 1.0, 1.5]
+    np.testing.assert_array_equal(first.ranges, scans.ranges[:4])
+    assert (first.angle_min, first.range_max, first.source) == (scans.angle_min, scans.range_max, scans.source)
+    assert len(scans.head(99)) == 10 and len(scans.head(0)) == 0
+    with pytest.raises(Exception, match="n: must be >= 0"):
+        scans.head(-1)
