@@ -2,7 +2,11 @@
 import numpy as np
 import pytest
 
-from crfmap.experiments.office_online import map_online, online_numbers
+from crfmap.crf.lbp import infer
+from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.experiments.office_online import (default_table_drift, map_online, near_versus_offline, online_numbers,
+                                             versus_offline)
+from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
 from crfmap.mapping.builder import build_grid
 from crfmap.mapping.online import OnlineMapper
@@ -64,5 +68,43 @@ def test_head_cuts_every_per_scan_field_alike():
     np.testing.assert_array_equal(first.ranges, scans.ranges[:4])
     assert (first.angle_min, first.range_max, first.source) == (scans.angle_min, scans.range_max, scans.source)
     assert len(scans.head(99)) == 10 and len(scans.head(0)) == 0
-    with pytest.raises(Exception, match="n: must be >= 0"):
+    with pytest.raises(InputError, match="n: must be >= 0"):
         scans.head(-1)
+
+
+WEAK = np.array([[1.5, 1.0], [1.0, 1.5]])  # LBP has one fixed point with it
+
+
+def test_online_then_finish_reaches_the_offline_fixed_point():
+    scans = room_scans()
+    numbers, offline_grid = versus_offline(scans, 0.1, WEAK, tol=1e-7)
+    assert np.array_equal(offline_grid.probability, build_grid(scans, 0.1).probability)
+    assert numbers["observations_equal_builder"] and numbers["same_grid"]
+    assert numbers["finish_converged"] and numbers["offline_converged"]
+    assert numbers["max_abs_belief_difference"] < 1e-4 and numbers["cells_differing_over_0.001"] == 0
+    offline = infer(offline_grid, WEAK, DEFAULT_LINK, tol=1e-7, max_iter=20000, dtype=np.float32)
+    assert numbers["offline_iterations"] == offline.iterations
+
+
+def test_near_observations_compare_on_the_mappers_region():
+    scans = room_scans()
+    _, offline_grid = versus_offline(scans, 0.1, WEAK, tol=1e-7)
+    near = OnlineMapper.for_scans(scans, 0.1, margin=2, radius=1.5, max_iter=4)
+    near.run(scans)
+    region = near.region()
+    numbers = near_versus_offline(scans, 0.1, offline_grid, WEAK, near, tol=1e-7)
+    assert numbers["margin_cells"] == 2 and numbers["region_cells"] == region.sum() < region.size
+    assert numbers["weak_converged"] and numbers["weak_max_abs_belief_difference"] < 1e-4
+    assert 0.0 <= numbers["default_same_state_fraction"] <= 1.0
+
+
+def test_default_table_drift_counts_what_moves():
+    scans = room_scans()
+    grid = build_grid(scans, 0.1)
+    numbers = default_table_drift(grid, tol=1e-9, iterations=3)
+    first = infer(grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=1e-9, max_iter=3)
+    second = infer(grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=1e-9, max_iter=3, messages=first.messages)
+    moving = np.abs(second.beliefs.probability - first.beliefs.probability) > 0.1
+    assert numbers["iterations"] == first.iterations + second.iterations
+    assert numbers["cells_moving_over_0.1_in_last_3_iterations"] == moving.sum()
+    assert 0.0 <= numbers["of_which_never_observed"] <= 1.0

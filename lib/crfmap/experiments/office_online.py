@@ -1,5 +1,6 @@
 """Notebook 07's online section: map a log scan by scan with :class:`~crfmap.mapping.online.OnlineMapper`, time it,
-and summarise what LBP did while mapping.
+summarise what LBP did while mapping, and check the end result against the offline pipeline
+(:func:`~crfmap.mapping.builder.build_grid` of all the scans, then :func:`~crfmap.crf.lbp.infer`).
 
 >>> import numpy as np
 >>> from crfmap.mapping.online import OnlineMapper
@@ -17,7 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crfmap.crf.lbp import infer
+from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.grid import UNKNOWN
+from crfmap.mapping.builder import build_grid
+from crfmap.mapping.online import OnlineMapper
+
+FINAL_MAX_ITER = 20000  # LBP iterations allowed for the final (whole-grid) comparisons
 
 
 @dataclass
@@ -73,3 +80,87 @@ def online_numbers(mapper, run: OnlineRun, log_seconds) -> dict:
     out["never_observed_fraction_made_occupied"] = (float((believed_now.probability[given] > 0.5).mean())
                                                     if given.any() else 0.0)
     return out
+
+
+def versus_offline(scans, resolution, hidden, tol, max_iter=FINAL_MAX_ITER) -> tuple:
+    """Online mapping with ``hidden`` then ``finish(tol)``, against ``build_grid`` + ``infer`` of the same scans.
+
+    Returns (numbers, the offline observation grid). ``hidden`` should be a table for which
+    offline LBP converges (else there is no fixed point to compare with).
+    """
+    t0 = time.perf_counter()
+    mapper = OnlineMapper.for_scans(scans, resolution, hidden=hidden)
+    mapper.run(scans)
+    mapping_seconds = time.perf_counter() - t0
+    final = mapper.finish(tol=tol, max_iter=max_iter)
+    offline_grid = build_grid(scans, resolution)
+    offline = infer(offline_grid, hidden, DEFAULT_LINK, tol=tol, max_iter=max_iter, dtype=np.float32)
+    difference = np.abs(final.beliefs.probability - offline.beliefs.probability)
+    observed = mapper.observations()
+    numbers = {
+        "hidden": hidden, "tol": tol,
+        "observations_equal_builder": bool(np.array_equal(observed.probability, offline_grid.probability)),
+        "same_grid": bool(observed.origin == offline_grid.origin and observed.shape == offline_grid.shape),
+        "online_mapping_seconds": mapping_seconds, "finish_iterations": final.iterations,
+        "finish_converged": final.converged, "finish_seconds": final.seconds,
+        "offline_iterations": offline.iterations, "offline_converged": offline.converged,
+        "offline_seconds": offline.seconds,
+        "max_abs_belief_difference": float(difference.max()),
+        "cells_differing_over_0.001": int(np.count_nonzero(difference > 1e-3)),
+    }
+    return numbers, offline_grid
+
+
+def near_versus_offline(scans, resolution, offline_grid, hidden, mapper_near, tol, max_iter=FINAL_MAX_ITER) -> dict:
+    """Near observations only: ``finish()`` against ``infer(region=mapper.region())``, with ``hidden`` and the defaults.
+
+    ``mapper_near`` has already mapped ``scans`` with the default tables and a margin (it is
+    finished here); a second mapper with the same margin maps them again with ``hidden``. The
+    default tables have no single fixed point, so for them we report the share of region cells
+    on the same side of 0.5, and how far offline LBP warm-started from the online messages moves.
+    """
+    margin = mapper_near.margin
+    weak = OnlineMapper.for_scans(scans, resolution, hidden=hidden, margin=margin)
+    weak.run(scans)
+    final_weak = weak.finish(tol=tol, max_iter=max_iter)
+    offline_weak = infer(offline_grid, hidden, DEFAULT_LINK, tol=tol, max_iter=max_iter, dtype=np.float32,
+                         region=weak.region())
+    final_default = mapper_near.finish(tol=tol, max_iter=max_iter)
+    offline_default = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=tol, max_iter=max_iter,
+                            dtype=np.float32, region=mapper_near.region())
+    warm_default = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=tol, max_iter=max_iter, dtype=np.float32,
+                         region=mapper_near.region(), messages=mapper_near.messages())
+    inside = mapper_near.region()
+    return {
+        "margin_cells": margin, "region_cells": int(inside.sum()),
+        "weak_max_abs_belief_difference": float(np.abs(final_weak.beliefs.probability
+                                                       - offline_weak.beliefs.probability).max()),
+        "weak_finish_iterations": final_weak.iterations, "weak_offline_iterations": offline_weak.iterations,
+        "weak_converged": bool(final_weak.converged and offline_weak.converged),
+        "default_finish_converged": final_default.converged,
+        "default_offline_converged": offline_default.converged,
+        "default_finish_iterations": final_default.iterations,
+        "default_offline_iterations": offline_default.iterations,
+        "default_same_state_fraction": float(np.mean((final_default.beliefs.probability[inside] > 0.5)
+                                                     == (offline_default.beliefs.probability[inside] > 0.5))),
+        "default_max_abs_difference_to_offline_warm_started_from_online": float(
+            np.abs(final_default.beliefs.probability - warm_default.beliefs.probability).max()),
+    }
+
+
+def default_table_drift(offline_grid, tol, iterations=250) -> dict:
+    """Offline LBP with the default tables, twice ``iterations`` (the second warm-started): what still moves.
+
+    With [[10, 1], [1, 10]] the CRF is in its ordered phase and LBP does not settle on a large grid;
+    the cells that move by more than 0.1 in the second half are mostly never-observed ones.
+    """
+    first_half = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=tol, max_iter=iterations)
+    second_half = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=tol, max_iter=iterations,
+                        messages=first_half.messages)
+    drift = np.abs(second_half.beliefs.probability - first_half.beliefs.probability) > 0.1
+    return {
+        "iterations": first_half.iterations + second_half.iterations, "converged": second_half.converged,
+        "last_max_change": float(second_half.max_change[np.isfinite(second_half.max_change)][-1]),
+        f"cells_moving_over_0.1_in_last_{iterations}_iterations": int(drift.sum()),
+        "of_which_never_observed": float((drift & ~offline_grid.known()).sum() / max(int(drift.sum()), 1)),
+    }
