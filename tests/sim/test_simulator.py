@@ -337,6 +337,8 @@ def test_a_mode_setting_belongs_to_its_drive():
         Waypoints(scan_period=0.0)
     with pytest.raises(InputError, match="^drive: expected one of"):
         simulate(scene, drive="teleport")
+    with pytest.raises(InputError, match="^linear_speed: does not apply to the look drive"):
+        simulate(scene, drive=Look(), linear_speed=0.3, progress=False)
 
 
 def test_a_mode_name_means_its_drive_with_the_defaults():

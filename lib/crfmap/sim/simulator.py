@@ -54,6 +54,7 @@ from crfmap.recording import Recording, ScanSet, Trajectory
 from crfmap.world.scenes import Scene
 
 SCAN_CHUNK = 512  # scans per progress-bar tick
+DEFAULT_LINEAR_SPEED = 0.5  # [m/s]
 PROGRESS_BEAMS = 2_000_000  # beams in a run above which simulate() shows a progress bar (below, it is too quick)
 
 
@@ -154,7 +155,7 @@ def _odometry_noise(value):
 
 
 def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, range_noise=0.0, range_sigma=0.0,
-             odometry_noise=0.0, laser_mount=(0.0, 0.0, 0.0), start=None, dt=0.1, linear_speed=0.5,
+             odometry_noise=0.0, laser_mount=(0.0, 0.0, 0.0), start=None, dt=0.1, linear_speed=None,
              angular_speed=1.5, t0=0.0, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
@@ -173,7 +174,8 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
         executed translation ``+- c`` (and each executed turn ``+- c_yaw``); 0 = perfect odometry
     laser_mount : (x, y, yaw) of the laser in base_link
     start : (x, y, yaw) [m, rad] or None (``scene.start``)
-    dt : float [s] per Twist command; ``linear_speed`` [m/s], ``angular_speed`` [rad/s] limits
+    dt : float [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which
+        only turns), ``angular_speed`` [rad/s] limits
     t0 : float [s], stamp of the first pose
     progress : bool, show a progress bar for the ray casting
 
@@ -194,6 +196,9 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
     if not isinstance(laser, Laser):
         raise InputError("laser", f"expected a crfmap.sim.simulator.Laser, got {type(laser).__name__}")
     drive = drive_for(scene.default_mode if drive is None else drive)
+    if linear_speed is not None and isinstance(drive, Look):
+        raise InputError("linear_speed", "does not apply to the look drive: the robot only turns in place")
+    linear_speed = DEFAULT_LINEAR_SPEED if linear_speed is None else linear_speed
     c_lin, c_yaw = _odometry_noise(odometry_noise)
     t0 = check_number("t0", t0)
     mount = np.array([check_number("laser_mount", v) for v in laser_mount], dtype=np.float64)
