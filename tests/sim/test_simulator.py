@@ -341,6 +341,13 @@ def test_a_mode_setting_belongs_to_its_drive():
         simulate(scene, drive=Look(), linear_speed=0.3, progress=False)
 
 
+def test_every_scene_mode_has_a_drive():
+    from crfmap.sim.drives import DRIVES
+    from crfmap.world.scene import MODES
+
+    assert sorted(DRIVES) == sorted(MODES) and all(DRIVES[m].mode == m for m in MODES)
+
+
 def test_a_mode_name_means_its_drive_with_the_defaults():
     scene = make_scene("enclosed-train")
     laser = Laser.with_fov(360, 90)
