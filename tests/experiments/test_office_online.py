@@ -6,7 +6,6 @@ from crfmap.crf.lbp import infer
 from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.experiments.office_online import (default_table_drift, map_online, near_versus_offline, online_numbers,
                                              versus_offline)
-from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
 from crfmap.mapping.builder import build_grid
 from crfmap.mapping.online import OnlineMapper
@@ -59,17 +58,6 @@ def test_numbers_follow_the_updates_and_the_last_snapshot():
     assert numbers["never_observed_cells_given_a_state"] == given.sum()
     assert 0.0 <= numbers["never_observed_fraction_made_occupied"] <= 1.0
     assert (numbers["radius_m"], numbers["max_iter_per_scan"]) == (1.5, 4)
-
-
-def test_head_cuts_every_per_scan_field_alike():
-    scans = room_scans()
-    first = scans.head(4)
-    assert len(first) == 4 and first.laser_poses.shape == (4, 3) and first.stamps.tolist() == [0.0, 0.5, 1.0, 1.5]
-    np.testing.assert_array_equal(first.ranges, scans.ranges[:4])
-    assert (first.angle_min, first.range_max, first.source) == (scans.angle_min, scans.range_max, scans.source)
-    assert len(scans.head(99)) == 10 and len(scans.head(0)) == 0
-    with pytest.raises(InputError, match="n: must be >= 0"):
-        scans.head(-1)
 
 
 WEAK = np.array([[1.5, 1.0], [1.0, 1.5]])  # LBP has one fixed point with it
