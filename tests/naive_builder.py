@@ -7,7 +7,7 @@ from naive_raycast import exact_line  # the exact rational line, independent of 
 
 
 def beams(scans, origin, resolution, free_on_no_return=0.0, max_range_is_no_return=True):
-    """Per scan, a list of (cells on the ray, ends_in_hit) under REP 117; no clipping (extent must hold all)."""
+    """Per scan, a list of (cells on the ray, ends_in_hit) under REP 117; no clipping (the bounds must hold all)."""
     ox, oy = origin
     range_min, range_max = float(np.float32(scans.range_min)), float(np.float32(scans.range_max))
     out = []

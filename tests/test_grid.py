@@ -27,6 +27,22 @@ def test_row_zero_is_lowest_y():
     assert g.cell_to_world(0, 0)[1] < g.cell_to_world(0, 2)[1]
 
 
+def test_bounds_and_imshow_extent_are_the_same_rectangle_in_two_orders():
+    g = OccupancyGrid(np.full((3, 4), 0.5), resolution=0.25, origin=(-1.0, 2.0, 0.0))
+    assert g.bounds() == (-1.0, 2.0, 0.0, 2.75)  # xmin, ymin, xmax, ymax
+    assert g.imshow_extent() == (-1.0, 0.0, 2.0, 2.75)  # left, right, bottom, top
+
+
+def test_bounds_of_a_rotated_grid_hold_every_cell_centre():
+    g = OccupancyGrid(np.full((4, 6), 0.5), resolution=0.5, origin=(1.0, -2.0, 0.7))
+    xmin, ymin, xmax, ymax = g.bounds()
+    iy, ix = np.mgrid[0:4, 0:6]
+    wx, wy = g.cell_to_world(ix, iy)
+    assert xmin < wx.min() and wx.max() < xmax and ymin < wy.min() and wy.max() < ymax
+    corners = [g.cell_to_world(x - 0.5, y - 0.5) for x, y in ((0, 0), (6, 0), (0, 4), (6, 4))]
+    assert min(c[0] for c in corners) == pytest.approx(xmin) and max(c[1] for c in corners) == pytest.approx(ymax)
+
+
 @pytest.mark.parametrize("kwargs, word", [({"resolution": 0}, "resolution"), ({"resolution": float("nan")}, "resolution"),
                                           ({"origin": (0, 0, 0, 0)}, "origin")])
 def test_bad_metadata(kwargs, word):

@@ -1,7 +1,9 @@
-"""Checked numbers: the one place where a user-supplied scalar is validated.
+"""Checked inputs: the one place where a user-supplied scalar or a pair of grids is validated.
 
 Every public function that takes a number from a user (a resolution, a noise bound, a seed, a count)
-checks it here, so the errors read the same everywhere: ``InputError(name, what is wrong)``.
+or an observed grid with its truth checks it here, so the errors read the same everywhere:
+``InputError(name, what is wrong)``. Domain checks (a scene variant, a potential table's layout) stay
+with their domain.
 """
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ import math
 import numpy as np
 
 from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid, check_probability_array
 
 
 def check_number(name, value, low=None, low_open=False, high=None) -> float:
@@ -34,7 +37,13 @@ def check_number(name, value, low=None, low_open=False, high=None) -> float:
 
 
 def check_positive(name, value) -> float:
-    """``value`` as a float > 0 (a resolution, a length, a duration)."""
+    """``value`` as a float > 0 (a resolution, a length, a duration).
+
+    >>> check_positive("resolution", 0)
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: resolution: must be > 0, got 0
+    """
     return check_number(name, value, low=0.0, low_open=True)
 
 
@@ -52,3 +61,28 @@ def check_int(name, value, low=None, high=None) -> int:
     if high is not None and value > high:
         raise InputError(name, f"must be <= {high}, got {value}")
     return value
+
+
+def check_pair(observed, truth, grids_only=False) -> tuple:
+    """The probability arrays of an observed grid and its truth, checked to have one shape.
+
+    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of
+    probabilities.
+
+    >>> obs, tru = check_pair(OccupancyGrid(np.full((2, 2), 0.5)), np.zeros((2, 2)))
+    >>> check_pair(obs, np.zeros((3, 2)))
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: truth: shape (3, 2) does not match the observed grid's (2, 2)
+    """
+    arrays = []
+    for name, grid in (("observed", observed), ("truth", truth)):
+        if isinstance(grid, OccupancyGrid):
+            arrays.append(grid.probability)
+        elif grids_only:
+            raise InputError(name, f"expected an OccupancyGrid, got {type(grid).__name__}")
+        else:
+            arrays.append(check_probability_array(grid, name))
+    if arrays[0].shape != arrays[1].shape:
+        raise InputError("truth", f"shape {arrays[1].shape} does not match the observed grid's {arrays[0].shape}")
+    return tuple(arrays)

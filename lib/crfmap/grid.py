@@ -104,10 +104,32 @@ class OccupancyGrid:
         c, s = math.cos(yaw), math.sin(yaw)
         return ox + c * u - s * v, oy + s * u + c * v
 
-    def extent(self):
-        """(left, right, bottom, top) in metres, for ``imshow(..., origin='lower')`` (yaw 0)."""
-        ox, oy, _ = self.origin
-        return (ox, ox + self.width * self.resolution, oy, oy + self.height * self.resolution)
+    def bounds(self):
+        """(xmin, ymin, xmax, ymax) [m]: the world rectangle the cells cover (their bounding box if rotated).
+
+        The form :func:`crfmap.mapping.build_grid` takes (``bounds=``) to build a grid over the same cells.
+
+        >>> OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)).bounds()
+        (1.0, 2.0, 2.5, 3.0)
+        """
+        ox, oy, yaw = self.origin
+        if yaw == 0.0:  # exact sums, no rounding through cos/sin
+            return (float(ox), float(oy), float(ox + self.width * self.resolution),
+                    float(oy + self.height * self.resolution))
+        u = np.array([0.0, self.width, 0.0, self.width]) * self.resolution
+        v = np.array([0.0, 0.0, self.height, self.height]) * self.resolution
+        c, s = math.cos(yaw), math.sin(yaw)
+        x, y = ox + c * u - s * v, oy + s * u + c * v
+        return (float(x.min()), float(y.min()), float(x.max()), float(y.max()))
+
+    def imshow_extent(self):
+        """(left, right, bottom, top) [m], matplotlib's ``imshow(..., extent=..., origin='lower')`` (yaw 0).
+
+        >>> OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)).imshow_extent()
+        (1.0, 2.5, 2.0, 3.0)
+        """
+        xmin, ymin, xmax, ymax = self.bounds()
+        return (xmin, xmax, ymin, ymax)
 
     # --- nav_msgs/OccupancyGrid values -------------------------------------------
     def to_int8(self) -> np.ndarray:

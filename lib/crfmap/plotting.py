@@ -13,7 +13,7 @@ def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = F
     """
     if isinstance(grid, OccupancyGrid):
         data = grid.probability
-        extent = None if cells else grid.extent()
+        extent = None if cells else grid.imshow_extent()
     else:
         data = np.asarray(grid)
         extent = None

@@ -6,9 +6,11 @@ and the bag writer consume them. Units are SI (metres, radians, seconds); poses 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from crfmap.checks import check_int
 
 
 @dataclass
@@ -50,6 +52,17 @@ class ScanSet:
     @property
     def angles(self) -> np.ndarray:
         return self.angle_min + self.angle_increment * np.arange(self.ranges.shape[1])
+
+    def head(self, n) -> "ScanSet":
+        """The first ``n`` scans (all of them if there are fewer), every per-scan field cut alike.
+
+        >>> s = ScanSet(np.ones((3, 2), np.float32), 0.0, 0.1, 0.1, 5.0, np.zeros((3, 3)), np.arange(3.0))
+        >>> first = s.head(2)
+        >>> len(first), first.laser_poses.shape, first.stamps.tolist()
+        (2, (2, 3), [0.0, 1.0])
+        """
+        n = check_int("n", n, low=0)
+        return replace(self, ranges=self.ranges[:n], laser_poses=self.laser_poses[:n], stamps=self.stamps[:n])
 
 
 @dataclass

@@ -10,18 +10,18 @@ from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.sim.simulator import Laser
 
 
-def test_truth_extent_rebuilds_the_same_cells():
+def test_truth_bounds_rebuilds_the_same_cells():
     truth = OccupancyGrid(np.zeros((4, 6)), 0.25, origin=(-1.0, 2.0, 0.0))
-    xmin, ymin, xmax, ymax = experiment.truth_extent(truth)
+    xmin, ymin, xmax, ymax = experiment.truth_bounds(truth)
     assert (xmin, ymin) == (-1.0, 2.0)
     assert round((xmax - xmin) / 0.25) == 6 and round((ymax - ymin) / 0.25) == 4
     with pytest.raises(InputError, match="truth"):
-        experiment.truth_extent(OccupancyGrid(np.zeros((2, 2)), 1.0, origin=(0.0, 0.0, 0.3)))
+        experiment.truth_bounds(OccupancyGrid(np.zeros((2, 2)), 1.0, origin=(0.0, 0.0, 0.3)))
 
 
 def test_exploring_with_perfect_sensors_sees_every_reachable_cell_correctly():
     scene = scenes.enclosed_boxes("train", size=20)
-    observed, recording = experiment.scan_scene(scene, Laser.with_fov(360, 90), mode="explore")
+    observed, recording = experiment.scan_scene(scene, Laser.with_fov(360, 90), drive="explore")
     assert observed.shape == scene.truth.shape and observed.origin == scene.truth.origin
     reach = scenes.reachable(scene.truth, scene.start)
     known = observed.probability != 0.5
@@ -89,7 +89,7 @@ def test_search_finds_the_best_point_of_its_grid_and_the_learner_never_ends_wors
     hidden, link, table = experiment.search_tables(observed, scene.truth, strengths, biases)
     i, j = np.unravel_index(np.argmin(table), table.shape)
     assert hidden[0, 0] == strengths[i] and link[1, 1] == biases[j]
-    assert table[i, j] == pytest.approx(lbp_mse(observed, scene.truth, hidden, link, experiment.CONVERGED))
+    assert table[i, j] == pytest.approx(lbp_mse(observed, scene.truth, hidden, link, experiment.TO_CONVERGENCE))
     result = experiment.learn_search_gradient(observed, scene.truth, strengths=strengths, biases=biases, steps=3,
                                               progress=False)
     assert result.mse_after <= table.min() + 1e-12
@@ -104,7 +104,7 @@ def test_train_and_test_applies_the_tables_learned_on_train_to_both_grids():
         scene = scenes.enclosed_boxes(variant, hollow=True, size=20)
         grids[variant] = (experiment.scan_scene(scene, Laser.with_fov(360, 90))[0], scene.truth)
     learners = {"thesis": lambda o, t, opts: learn_thesis(o, t, lbp_options=opts, max_rounds=2, progress=False)}
-    settings = {"converged": experiment.CONVERGED, "two": experiment.THESIS_TWO_ITERATIONS}
+    settings = {"converged": experiment.TO_CONVERGENCE, "two": experiment.THESIS_TWO_ITERATIONS}
     run = experiment.train_and_test(grids["train"], grids["test"], learners, settings, progress=False)
     assert set(run.learned) == {("converged", "thesis"), ("two", "thesis")}
     assert len(run.results) == 2 * 2 * 2

@@ -8,7 +8,7 @@ import naive_builder as naive
 from crfmap import paths
 from crfmap.io.carmen import read_carmen
 from crfmap.mapping.builder import (HitCounter, arctan_probability, build_grid, count_hits, logodds_to_probability,
-                            scan_extent)
+                            scan_bounds)
 from crfmap.cli import main
 from crfmap.errors import InputError
 from crfmap.recording import ScanSet
@@ -35,7 +35,7 @@ def random_scans(seed, n_scans=6, n_beams=15, special=True):
     return ScanSet(ranges, -2.0, 4.0 / (n_beams - 1), 0.1, 2.0, poses, np.arange(n_scans, dtype=float))
 
 
-EXTENT = (-1.0, -1.5, 5.0, 4.5)  # holds every ray of random_scans, even 2.5 m no-return ones
+BOUNDS = (-1.0, -1.5, 5.0, 4.5)  # holds every ray of random_scans, even 2.5 m no-return ones
 
 
 # --- counts against the reference ---------------------------------------------------------
@@ -44,8 +44,8 @@ EXTENT = (-1.0, -1.5, 5.0, 4.5)  # holds every ray of random_scans, even 2.5 m n
 def test_counts_match_naive_reference(seed, free):
     scans = random_scans(seed)
     res = 0.1
-    occ, emp = count_hits(scans, res, extent=EXTENT, free_on_no_return=free)
-    ref_occ, ref_emp = naive.count_hits(scans, occ.shape, EXTENT[:2], res, free_on_no_return=free or 0.0)
+    occ, emp = count_hits(scans, res, bounds=BOUNDS, free_on_no_return=free)
+    ref_occ, ref_emp = naive.count_hits(scans, occ.shape, BOUNDS[:2], res, free_on_no_return=free or 0.0)
     assert occ.shape == (60, 60)
     assert occ.sum() > 0 and emp.sum() > 0
     np.testing.assert_array_equal(occ, ref_occ)
@@ -54,23 +54,23 @@ def test_counts_match_naive_reference(seed, free):
 
 def test_one_beam_cells_and_eq16():
     # Laser in cell (0, 0), a 0.36 m return along +x at 0.1 m cells: cells 0..3 passed, cell 4 hit.
-    occ, emp = count_hits(one_beam(0.36), 0.1, extent=(0, 0, 0.6, 0.1))
+    occ, emp = count_hits(one_beam(0.36), 0.1, bounds=(0, 0, 0.6, 0.1))
     assert occ.tolist() == [[0, 0, 0, 0, 1, 0]]
     assert emp.tolist() == [[1, 1, 1, 1, 0, 0]]
-    p = build_grid(one_beam(0.36), 0.1, extent=(0, 0, 0.6, 0.1)).probability[0]
+    p = build_grid(one_beam(0.36), 0.1, bounds=(0, 0, 0.6, 0.1)).probability[0]
     # eq. 16: x = -1 -> 0.5 + atan(-1)/pi = 0.25; x = +1 -> 0.75; never seen -> 0.5
     np.testing.assert_allclose(p, [0.25, 0.25, 0.25, 0.25, 0.75, 0.5])
 
 
 def test_arctan_grid_is_eq16_of_the_counts():
     scans = random_scans(3)
-    occ, emp = count_hits(scans, 0.1, extent=EXTENT)
-    grid = build_grid(scans, 0.1, extent=EXTENT)
+    occ, emp = count_hits(scans, 0.1, bounds=BOUNDS)
+    grid = build_grid(scans, 0.1, bounds=BOUNDS)
     expected = 0.5 + np.arctan(occ.astype(float) - emp) / np.pi
     np.testing.assert_allclose(grid.probability, expected, rtol=0, atol=1e-15)
     never = (occ == 0) & (emp == 0)
     assert never.any() and np.all(grid.probability[never] == 0.5)
-    assert grid.origin == (EXTENT[0], EXTENT[1], 0.0) and grid.resolution == 0.1
+    assert grid.origin == (BOUNDS[0], BOUNDS[1], 0.0) and grid.resolution == 0.1
     # Repeated evidence approaches but never reaches certainty (thesis sec. 3.2).
     assert arctan_probability(np.array([1000]), np.array([0]))[0] < 1.0
 
@@ -78,20 +78,20 @@ def test_arctan_grid_is_eq16_of_the_counts():
 @pytest.mark.parametrize("seed", [0, 4])
 def test_logodds_matches_naive_reference(seed):
     scans = random_scans(seed)
-    grid = build_grid(scans, 0.1, model="logodds", extent=EXTENT, p_hit=0.7, p_miss=0.4, logodds_limit=1.0)
-    ref = naive.logodds(scans, grid.shape, EXTENT[:2], 0.1, 0.7, 0.4, 1.0)
+    grid = build_grid(scans, 0.1, model="logodds", bounds=BOUNDS, p_hit=0.7, p_miss=0.4, logodds_limit=1.0)
+    ref = naive.logodds(scans, grid.shape, BOUNDS[:2], 0.1, 0.7, 0.4, 1.0)
     np.testing.assert_allclose(grid.probability, ref, rtol=0, atol=1e-12)
     assert np.any(np.isclose(ref, 1 / (1 + math.exp(-1.0))))  # the clamp was reached somewhere
 
 
 def test_logodds_formulas_single_scan_and_clamp():
-    grid = build_grid(one_beam(0.36), 0.1, model="logodds", extent=(0, 0, 0.6, 0.1), p_hit=0.7, p_miss=0.4)
+    grid = build_grid(one_beam(0.36), 0.1, model="logodds", bounds=(0, 0, 0.6, 0.1), p_hit=0.7, p_miss=0.4)
     # One observation: P = 1 - 1/(1 + exp(log(p/(1-p)))) = p exactly.
     np.testing.assert_allclose(grid.probability[0], [0.4, 0.4, 0.4, 0.4, 0.7, 0.5])
     # Twenty identical scans: l = 20 * log(7/3) = 16.9 is clamped to the limit.
     s = one_beam(0.36)
     many = ScanSet(np.repeat(s.ranges, 20, 0), 0.0, 0.0, 0.1, 5.0, np.repeat(s.laser_poses, 20, 0), np.arange(20.0))
-    g = build_grid(many, 0.1, model="logodds", extent=(0, 0, 0.6, 0.1), logodds_limit=3.0)
+    g = build_grid(many, 0.1, model="logodds", bounds=(0, 0, 0.6, 0.1), logodds_limit=3.0)
     np.testing.assert_allclose(g.probability[0, 4], 1 - 1 / (1 + math.exp(3.0)))
     np.testing.assert_allclose(g.probability[0, 0], 1 - 1 / (1 + math.exp(-3.0)))
     assert logodds_to_probability(np.array([800.0]))[0] == 1.0  # no overflow warning
@@ -100,48 +100,48 @@ def test_logodds_formulas_single_scan_and_clamp():
 def test_logodds_counts_each_cell_once_per_scan():
     # Two beams of one scan pass the laser's cell: one update there, not two.
     s = ScanSet(np.array([[0.36, 0.36]], np.float32), 0.0, 0.1, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
-    g = build_grid(s, 0.1, model="logodds", extent=(0, 0, 0.6, 0.6))
+    g = build_grid(s, 0.1, model="logodds", bounds=(0, 0, 0.6, 0.6))
     assert g.probability[0, 0] == pytest.approx(0.4)
-    occ, emp = count_hits(s, 0.1, extent=(0, 0, 0.6, 0.6))
+    occ, emp = count_hits(s, 0.1, bounds=(0, 0, 0.6, 0.6))
     assert emp[0, 0] == 2  # while the thesis's counts are per beam
 
 
 # --- REP 117 ---------------------------------------------------------------------------------
 @pytest.mark.parametrize("r", [np.nan, -np.inf, np.inf, 0.05, 6.0])
 def test_rep117_dropped_readings_touch_nothing(r):
-    occ, emp = count_hits(one_beam(r), 0.1, extent=(0, 0, 1, 1))
+    occ, emp = count_hits(one_beam(r), 0.1, bounds=(0, 0, 1, 1))
     assert occ.sum() == 0 and emp.sum() == 0
 
 
 def test_range_limits_are_inclusive_and_range_max_is_the_legacy_no_return():
-    occ, _ = count_hits(one_beam(0.1), 0.1, extent=(0, 0, 1, 1))
+    occ, _ = count_hits(one_beam(0.1), 0.1, bounds=(0, 0, 1, 1))
     assert occ.sum() == 1  # range_min itself is valid
-    occ, emp = count_hits(one_beam(5.0, range_max=5.0), 0.1, extent=(0, 0, 6, 1))
+    occ, emp = count_hits(one_beam(5.0, range_max=5.0), 0.1, bounds=(0, 0, 6, 1))
     assert occ.sum() == 0 and emp.sum() == 0  # range_max = "nothing returned" (legacy code)
-    occ, _ = count_hits(one_beam(5.0, range_max=5.0), 0.1, extent=(0, 0, 6, 1), max_range_is_no_return=False)
+    occ, _ = count_hits(one_beam(5.0, range_max=5.0), 0.1, bounds=(0, 0, 6, 1), max_range_is_no_return=False)
     assert occ.sum() == 1
 
 
 def test_free_on_no_return_clears_up_to_the_range_only():
-    occ, emp = count_hits(one_beam(np.inf), 0.1, extent=(0, 0, 3, 0.1), free_on_no_return=1.0)
+    occ, emp = count_hits(one_beam(np.inf), 0.1, bounds=(0, 0, 3, 0.1), free_on_no_return=1.0)
     assert occ.sum() == 0
     assert emp[0].tolist() == [1] * 11 + [0] * 19  # cells 0..10: x from 0.05 to 1.05 m
     # NaN and -Inf never clear space, only +Inf does.
     for r in (np.nan, -np.inf):
-        occ, emp = count_hits(one_beam(r), 0.1, extent=(0, 0, 3, 0.1), free_on_no_return=1.0)
+        occ, emp = count_hits(one_beam(r), 0.1, bounds=(0, 0, 3, 0.1), free_on_no_return=1.0)
         assert emp.sum() == 0
     # True means "up to range_max".
-    _, emp = count_hits(one_beam(np.inf, range_max=2.0), 0.1, extent=(0, 0, 3, 0.1), free_on_no_return=True)
+    _, emp = count_hits(one_beam(np.inf, range_max=2.0), 0.1, bounds=(0, 0, 3, 0.1), free_on_no_return=True)
     assert emp.sum() == 21
 
 
-# --- extent -------------------------------------------------------------------------------------
-def test_extent_from_data_holds_every_end_point():
+# --- bounds -------------------------------------------------------------------------------------
+def test_bounds_from_data_holds_every_end_point():
     scans = random_scans(5)
     occ, _ = count_hits(scans, 0.05)
     grid = build_grid(scans, 0.05)
     assert grid.shape == occ.shape
-    xmin, ymin, xmax, ymax = scan_extent(scans)
+    xmin, ymin, xmax, ymax = scan_bounds(scans)
     ox, oy, _ = grid.origin
     assert ox <= xmin and oy <= ymin
     assert ox + grid.width * 0.05 >= xmax - 1e-9 and oy + grid.height * 0.05 >= ymax - 1e-9
@@ -150,14 +150,14 @@ def test_extent_from_data_holds_every_end_point():
     assert math.isclose(ox / 0.05, round(ox / 0.05), abs_tol=1e-6)  # origin snapped to the resolution
 
 
-def test_given_extent_cuts_beams_without_false_walls():
-    occ, emp = count_hits(one_beam(2.0), 0.1, extent=(0, 0, 1.0, 0.1))
+def test_given_bounds_cut_beams_without_false_walls():
+    occ, emp = count_hits(one_beam(2.0), 0.1, bounds=(0, 0, 1.0, 0.1))
     assert occ.sum() == 0 and emp[0].tolist() == [1] * 10
 
 
-def test_pose_outside_extent_is_an_input_error():
-    with pytest.raises(InputError, match="extent.*scan 0.*outside"):
-        build_grid(one_beam(1.0, pose=(5.0, 0.05, 0.0)), 0.1, extent=(0, 0, 1, 1))
+def test_pose_outside_bounds_is_an_input_error():
+    with pytest.raises(InputError, match="bounds.*scan 0.*outside"):
+        build_grid(one_beam(1.0, pose=(5.0, 0.05, 0.0)), 0.1, bounds=(0, 0, 1, 1))
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -166,7 +166,7 @@ def test_pose_outside_extent_is_an_input_error():
     (dict(model="bayes"), "model"),
     (dict(model="logodds", p_hit=0.4), "p_hit"),
     (dict(model="logodds", p_miss=1.0), "p_miss"),
-    (dict(extent=(1, 0, 0, 1)), "extent"),
+    (dict(bounds=(1, 0, 0, 1)), "bounds"),
     (dict(free_on_no_return=-1.0), "free_on_no_return"),
     (dict(resolution=1e-5), "too large"),
 ])
@@ -181,7 +181,7 @@ def test_bad_arguments(kwargs, match):
 def test_hit_counter_one_scan_at_a_time_equals_the_whole_recording(seed):
     """Scans added one by one, in any order, give count_hits's counts and build_grid's grid."""
     scans = random_scans(seed, n_scans=8)
-    counter = HitCounter.for_scans(scans, 0.1, extent=EXTENT, free_on_no_return=1.5)
+    counter = HitCounter.for_scans(scans, 0.1, bounds=BOUNDS, free_on_no_return=1.5)
     for i in np.random.default_rng(seed).permutation(len(scans)):
         before = (counter.occupied.copy(), counter.empty.copy())
         cells = counter.add_scan(scans.ranges[i], scans.laser_poses[i])
@@ -192,10 +192,10 @@ def test_hit_counter_one_scan_at_a_time_equals_the_whole_recording(seed):
         listed[cells[:, 1], cells[:, 0]] = True
         assert len(np.unique(cells, axis=0)) == len(cells)
         np.testing.assert_array_equal(listed, moved)
-    occupied, empty = count_hits(scans, 0.1, extent=EXTENT, free_on_no_return=1.5)
+    occupied, empty = count_hits(scans, 0.1, bounds=BOUNDS, free_on_no_return=1.5)
     np.testing.assert_array_equal(counter.occupied, occupied)
     np.testing.assert_array_equal(counter.empty, empty)
-    grid = build_grid(scans, 0.1, extent=EXTENT, free_on_no_return=1.5)
+    grid = build_grid(scans, 0.1, bounds=BOUNDS, free_on_no_return=1.5)
     np.testing.assert_array_equal(counter.grid().probability, grid.probability)
     assert counter.grid().origin == grid.origin and counter.scans == len(scans)
 

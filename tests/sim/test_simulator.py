@@ -10,6 +10,7 @@ from crfmap.grid import OccupancyGrid
 from crfmap.raycast import first_hit
 from crfmap.recording import Recording
 from crfmap.world.scenes import Scene, enclosed_boxes, make_scene, office_floor, reachable, traversable
+from crfmap.sim.drives import Explore, Look, Waypoints
 from crfmap.sim.simulator import (
     LEGACY_NO_RETURN, Laser, add_range_noise, cast_rays, compose, explore_reachable, follow_waypoints, look_around,
     simulate,
@@ -84,9 +85,9 @@ def test_no_return_is_inf_or_legacy_minus_one_and_too_close_is_minus_inf():
 def test_range_noise_is_bounded_and_used():
     scene = enclosed_boxes("test")
     laser = Laser.with_fov(360, 180)
-    clean = simulate(scene, laser, "explore", stride=6, progress=False).scans.ranges.astype(float)
+    clean = simulate(scene, laser, Explore(stride=6), progress=False).scans.ranges.astype(float)
     c = 0.05
-    noisy = simulate(scene, laser, "explore", stride=6, range_noise=c, seed=3, progress=False)
+    noisy = simulate(scene, laser, Explore(stride=6), range_noise=c, seed=3, progress=False)
     noisy = noisy.scans.ranges.astype(float)
     finite = np.isfinite(clean)
     assert np.array_equal(finite, np.isfinite(noisy)) and finite.sum() > 1000
@@ -114,7 +115,7 @@ def recordings_equal(a: Recording, b: Recording) -> bool:
 
 def test_same_seed_same_recording_other_seed_other_noise():
     scene = make_scene("hollow-train")
-    kw = dict(laser=Laser.with_fov(180, 90), mode="explore", stride=4, range_noise=0.02, odometry_noise=(0.01, 0.01),
+    kw = dict(laser=Laser.with_fov(180, 90), drive=Explore(stride=4), range_noise=0.02, odometry_noise=(0.01, 0.01),
               progress=False)
     a, b, c = simulate(scene, seed=1, **kw), simulate(scene, seed=1, **kw), simulate(scene, seed=2, **kw)
     assert recordings_equal(a, b)
@@ -125,7 +126,7 @@ def test_same_seed_same_recording_other_seed_other_noise():
 
 def test_perfect_odometry_equals_true_poses_and_noisy_odometry_drifts():
     scene = make_scene("enclosed-test")
-    perfect = simulate(scene, mode="explore", stride=5, progress=False)
+    perfect = simulate(scene, drive=Explore(stride=5), progress=False)
     start = np.asarray(perfect.meta["map_to_odom"])
     np.testing.assert_allclose(perfect.odometry.poses[0], [0, 0, 0])
     in_map = compose(start, perfect.odometry.poses)
@@ -133,7 +134,7 @@ def test_perfect_odometry_equals_true_poses_and_noisy_odometry_drifts():
     np.testing.assert_allclose(np.cos(in_map[:, 2] - perfect.true_poses.poses[:, 2]), 1.0, atol=1e-12)
     np.testing.assert_allclose(perfect.odometry.twists, perfect.true_poses.twists, atol=1e-12)
 
-    noisy = simulate(scene, mode="explore", stride=5, odometry_noise=(0.01, 0.02), seed=4, progress=False)
+    noisy = simulate(scene, drive=Explore(stride=5), odometry_noise=(0.01, 0.02), seed=4, progress=False)
     assert np.array_equal(noisy.true_poses.poses, perfect.true_poses.poses)
     drift = np.hypot(*(compose(start, noisy.odometry.poses)[:, :2] - noisy.true_poses.poses[:, :2]).T)
     assert drift[0] == 0 and drift[-1] > 0.1 and drift[: len(drift) // 10].mean() < drift[-len(drift) // 10 :].mean()
@@ -147,7 +148,7 @@ def test_perfect_odometry_equals_true_poses_and_noisy_odometry_drifts():
 def test_explore_visits_and_scans_every_reachable_cell():
     for name in ("enclosed-train", "hollow-test", "x"):
         scene = make_scene(name)
-        rec = simulate(scene, mode="explore", progress=False)
+        rec = simulate(scene, drive="explore", progress=False)
         grid = scene.truth
         mask = reachable(grid, scene.start)
         visited = np.zeros_like(mask)
@@ -188,7 +189,7 @@ def test_limited_fov_turns_in_place():
 
 def test_waypoints_are_reached_without_entering_walls():
     scene = office_floor(12.0, 10.0, 0.1, seed=3)
-    rec = simulate(scene, mode="waypoints", scan_period=0.5, progress=False)
+    rec = simulate(scene, drive=Waypoints(scan_period=0.5), progress=False)
     poses = rec.true_poses.poses
     for wp in scene.waypoints:
         assert np.hypot(*(poses[:, :2] - wp).T).min() < 0.01
@@ -206,7 +207,7 @@ def test_waypoints_are_reached_without_entering_walls():
 @pytest.mark.parametrize("name", ["x", "occluded-test", "hollow-train"])
 def test_thesis_scenes_have_a_drivable_lap(name):
     scene = make_scene(name)
-    rec = simulate(scene, mode="waypoints", progress=False)
+    rec = simulate(scene, drive="waypoints", progress=False)
     poses = rec.true_poses.poses
     for wp in scene.waypoints:
         assert np.hypot(*(poses[:, :2] - wp).T).min() < 0.01
@@ -228,7 +229,7 @@ def test_a_blocked_step_is_not_taken():
 def test_laser_mount_offsets_the_scan_poses():
     scene = make_scene("enclosed-train")
     mount = (0.05, -0.02, math.pi / 2)
-    rec = simulate(scene, mode="explore", stride=5, laser_mount=mount, progress=False)
+    rec = simulate(scene, drive=Explore(stride=5), laser_mount=mount, progress=False)
     idx = np.searchsorted(rec.true_poses.stamps, rec.scans.stamps)
     np.testing.assert_allclose(rec.scans.laser_poses, compose(rec.true_poses.poses[idx], mount), atol=1e-12)
     assert rec.laser_mount == pytest.approx(mount)
@@ -236,7 +237,7 @@ def test_laser_mount_offsets_the_scan_poses():
 
 def test_recording_layout():
     scene = make_scene("enclosed-train")
-    rec = simulate(scene, Laser.with_fov(240, 121, range_max=3.0), mode="explore", stride=3, progress=False)
+    rec = simulate(scene, Laser.with_fov(240, 121, range_max=3.0), Explore(stride=3), progress=False)
     s = rec.scans
     assert s.ranges.dtype == np.float32 and s.ranges.shape[1] == 121 and s.frame_id == "map"
     assert s.angle_min == pytest.approx(-math.radians(120)) and s.angles[-1] == pytest.approx(math.radians(120))
@@ -251,13 +252,13 @@ def test_recording_layout():
 def test_bad_arguments():
     scene = make_scene("enclosed-train")
     with pytest.raises(InputError):
-        simulate(scene, mode="teleport")
+        simulate(scene, drive="teleport")
     with pytest.raises(InputError):
         simulate(scene, range_noise=-1)
     with pytest.raises(InputError):
         simulate(scene, odometry_noise=(0.1, 0.1, 0.1))
     with pytest.raises(InputError, match="no waypoints"):
-        simulate(box_room(), mode="waypoints")  # the scene has none
+        simulate(box_room(), drive="waypoints")  # the scene has none
     with pytest.raises(InputError):
         simulate(scene, start=(0.05, 0.05, 0.0))  # in the wall
     with pytest.raises(InputError):
@@ -296,6 +297,13 @@ def test_command_refuses_bad_input(tmp_path, capsys):
     assert not (tmp_path / "new").exists()
     with pytest.raises(SystemExit):
         parse(["garage", str(tmp_path / "x")])
+    capsys.readouterr()
+    # a mode-specific option given to another mode: one line naming it, nothing written
+    assert cli.main(["simulate", "enclosed-train", str(tmp_path / "new"), "--mode", "look", "--stride", "2",
+                     "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--stride" in err and "explore" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "new").exists()
 
 
 @pytest.mark.parametrize("fmt", ["ros2", "ros1"])
@@ -313,3 +321,41 @@ def test_command_writes_a_bag(tmp_path, fmt):
     np.testing.assert_allclose(back.scans.laser_poses, want.scans.laser_poses, atol=1e-6)
     assert cli.main(argv) == 2  # exists now
     assert cli.main(argv + ["--overwrite"]) == 0
+
+
+def test_a_mode_setting_belongs_to_its_drive():
+    scene = make_scene("enclosed-train")
+    for name, value, drive in (("stride", 2, "Explore"), ("turns", 2, "Look"), ("scan_period", 0.5, "Waypoints"),
+                               ("waypoints", [(0.5, 0.5)], "Waypoints"), ("robot_radius", 0.1, "Explore or Waypoints")):
+        with pytest.raises(InputError, match=rf"^{name}: belongs to the drive: pass drive={drive}\("):
+            simulate(scene, drive="explore", progress=False, **{name: value})
+    with pytest.raises(InputError, match="^stride: must be >= 1"):
+        Explore(stride=0)
+    with pytest.raises(InputError, match="^turns: expected an integer"):
+        Look(turns=1.5)
+    with pytest.raises(InputError, match="^scan_period: must be > 0"):
+        Waypoints(scan_period=0.0)
+    with pytest.raises(InputError, match="^drive: expected one of"):
+        simulate(scene, drive="teleport")
+    with pytest.raises(InputError, match="^linear_speed: does not apply to the look drive"):
+        simulate(scene, drive=Look(), linear_speed=0.3, progress=False)
+
+
+def test_every_scene_mode_has_a_drive():
+    from crfmap.sim.drives import DRIVES
+    from crfmap.world.scene import MODES
+
+    assert sorted(DRIVES) == sorted(MODES) and all(DRIVES[m].mode == m for m in MODES)
+
+
+def test_a_mode_name_means_its_drive_with_the_defaults():
+    scene = make_scene("enclosed-train")
+    laser = Laser.with_fov(360, 90)
+    for name, drive in (("explore", Explore()), ("look", Look())):
+        a = simulate(scene, laser, name, range_noise=0.02, seed=5, progress=False)
+        b = simulate(scene, laser, drive, range_noise=0.02, seed=5, progress=False)
+        assert recordings_equal(a, b) and a.meta == b.meta and a.meta["mode"] == name
+    two = simulate(scene, laser, Look(turns=3), progress=False)
+    assert two.scans.ranges.shape == (3, 90)  # the turns reach the motion
+    wide = simulate(scene, laser, Explore(stride=3, robot_radius=0.0), progress=False)
+    assert wide.meta["robot_radius"] == 0.0 and len(wide.scans) < len(simulate(scene, laser, progress=False).scans)

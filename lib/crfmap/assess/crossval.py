@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crfmap.checks import check_int
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid, check_probability_array
 from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
@@ -58,8 +59,7 @@ def _mask(mask, name="mask") -> np.ndarray:
 
 
 def _check_k(k, n_cells):
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 2:
-        raise InputError("k", f"need a whole number of folds >= 2, got {k!r}")
+    k = check_int("k", k, low=2)
     if k > n_cells:
         raise InputError("k", f"{k} folds but only {n_cells} cells to share among them")
     return int(k)

@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crfmap.checks import check_pair
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid, check_probability_array
 from crfmap.crf.lbp import infer
 from crfmap.assess.metrics import mse
 from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
@@ -52,23 +52,9 @@ class LearningResult:
     method: str = "thesis"
 
 
-def _values(grid, name):
-    if isinstance(grid, OccupancyGrid):
-        return grid.probability
-    return check_probability_array(grid, name)
-
-
-def _check_pair(observed, truth):
-    obs = _values(observed, "observed")
-    tru = _values(truth, "truth")
-    if obs.shape != tru.shape:
-        raise InputError("truth", f"shape {tru.shape} does not match the observed grid's {obs.shape}")
-    return obs, tru
-
-
 def lbp_mse(observed, truth, hidden, link, lbp_options=None) -> float:
     """MSE against the truth of the beliefs LBP gives with these tables."""
-    obs, tru = _check_pair(observed, truth)
+    obs, tru = check_pair(observed, truth)
     result = infer(obs, hidden, link, **(lbp_options or {}))
     return mse(result.beliefs, tru)
 
@@ -113,7 +99,7 @@ def learn_thesis(
     >>> bool(r.mse_after <= r.mse_before)
     True
     """
-    obs, tru = _check_pair(observed, truth)
+    obs, tru = check_pair(observed, truth)
     if not (alpha > 0 and min_alpha > 0):
         raise InputError("alpha", f"alpha and min_alpha must be positive, got {alpha!r}, {min_alpha!r}")
     tables = np.concatenate([check_table(hidden, "hidden").ravel(), check_table(link, "link").ravel()])
@@ -192,7 +178,7 @@ def learn_gradient(
     that lowers the MSE is kept and the size grows by 1.5, otherwise it halves; the search stops
     when the size falls below ``min_step`` or after ``steps`` steps.
     """
-    obs, tru = _check_pair(observed, truth)
+    obs, tru = check_pair(observed, truth)
     H0, L0 = check_table(hidden, "hidden"), check_table(link, "link")
     opts = dict(lbp_options or {})
     before = lbp_mse(obs, tru, H0, L0, opts)
@@ -264,7 +250,7 @@ def pseudolikelihood(observed, truth, hidden, link, mask=None):
     ``phi_i(c) = link[c, 1-state] ...`` i.e. ``phi_i(c) = link[c, 0] * o_i + link[c, 1] * (1 - o_i)``.
     Returns (value, gradient of shape (8,)).
     """
-    obs, tru = _check_pair(observed, truth)
+    obs, tru = check_pair(observed, truth)
     H = check_table(hidden, "hidden")
     L = check_table(link, "link")
     x = tru > 0.5
@@ -323,7 +309,7 @@ def learn_pseudolikelihood(
     entry) so their logs exist. ``mse_before``/``mse_after`` are LBP's MSE with the starting and
     learned tables under ``lbp_options``, for comparison with :func:`learn_thesis`.
     """
-    obs, tru = _check_pair(observed, truth)
+    obs, tru = check_pair(observed, truth)
     theta = _log_entries(hidden, link, floor)
     m = np.zeros(8)
     v = np.zeros(8)

@@ -61,6 +61,4 @@ def bench_online(quick=False, progress=False):
 
 
 def _first_scans(scans, n):
-    from dataclasses import replace
-
-    return replace(scans, ranges=scans.ranges[:n], laser_poses=scans.laser_poses[:n], stamps=scans.stamps[:n])
+    return scans.head(n)

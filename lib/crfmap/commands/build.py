@@ -147,7 +147,7 @@ def add_parser(sub):
     p.add_argument("--free-on-no-return", type=float, default=None, metavar="M",
                    help="mark cells free up to M metres along beams that returned nothing (+Inf)")
     add_bag_options(p)
-    p.add_argument("--extent", type=float, nargs=4, default=None, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
+    p.add_argument("--bounds", type=float, nargs=4, default=None, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
                    help="area to map in metres (default: the data's bounding box)")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     add_map_output_options(p)
@@ -163,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
                          laser_mount=args.laser_mount)
-    grid = build_grid(rec.scans, args.resolution, model=args.model, extent=args.extent,
+    grid = build_grid(rec.scans, args.resolution, model=args.model, bounds=args.bounds,
                       free_on_no_return=args.free_on_no_return or False, progress=args.progress)
     nav2_view = save_map_output(grid, out, args)
     seconds = time.perf_counter() - start

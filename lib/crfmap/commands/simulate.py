@@ -49,8 +49,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="odometry reads each step's translation +- c, c uniform in [0, C] [m] (default 0: perfect)")
     p.add_argument("--odom-yaw-noise", type=float, default=0.0, metavar="C",
                    help="odometry reads each step's turn +- c, c uniform in [0, C] [rad] (default 0)")
-    p.add_argument("--stride", type=int, default=1, metavar="N",
-                   help="explore: look around only every N cells (default 1: at every cell)")
+    p.add_argument("--stride", type=int, default=None, metavar="N",
+                   help="explore mode only: look around only every N cells (default 1: at every cell)")
     p.add_argument("--resolution", type=float, default=None, metavar="M",
                    help="cell size of the scene [m] (default 0.1; office 0.05)")
     p.add_argument("--legacy-no-return", action="store_true",
@@ -66,6 +66,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def build_recording(args):
     """The simulated :class:`~crfmap.recording.Recording` the command would write (no file touched)."""
     from crfmap.world.scenes import make_scene
+    from crfmap.sim.drives import Explore
     from crfmap.sim.simulator import LEGACY_NO_RETURN, Laser, simulate
 
     scene_kwargs = {}
@@ -83,15 +84,18 @@ def build_recording(args):
             raise InputError(flag, f"must be a finite number, got {value}")
     laser = Laser.with_fov(args.fov, args.beams, range_max=args.range_max, range_min=args.range_min,
                            no_return=LEGACY_NO_RETURN if args.legacy_no_return else math.inf)
+    mode = args.mode or scene.default_mode
+    if args.stride is not None and mode != "explore":
+        raise InputError("--stride", f"applies to --mode explore only, not {mode}")
+    drive = Explore(stride=args.stride) if args.stride is not None else mode
     return simulate(
         scene,
         laser,
-        args.mode,
+        drive,
         seed=args.seed,
         range_noise=args.range_noise,
         range_sigma=args.range_sigma,
         odometry_noise=(args.odom_noise, args.odom_yaw_noise),
-        stride=args.stride,
         progress=not args.quiet,
     )
 

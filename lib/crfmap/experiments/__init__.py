@@ -4,6 +4,7 @@ Public API (imported on first use, so ``import crfmap.experiments`` stays cheap)
 
 - :mod:`crfmap.experiments.pipeline`: ``scan_scene``, ``evaluate_pipeline``, ``train_and_test``, ``search_tables``, ``PipelineResult``, ``TrainTest``
 - :mod:`crfmap.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``
+- :mod:`crfmap.experiments.office_online`: ``map_online``, ``online_numbers``, ``OnlineRun``, ``versus_offline``, ``near_versus_offline``, ``default_table_drift``
 - :mod:`crfmap.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
 """
 from __future__ import annotations
@@ -21,6 +22,12 @@ _API = {
     "observe": "explorer",
     "run": "explorer",
     "draw": "explorer",
+    "map_online": "office_online",
+    "online_numbers": "office_online",
+    "OnlineRun": "office_online",
+    "versus_offline": "office_online",
+    "near_versus_offline": "office_online",
+    "default_table_drift": "office_online",
     "gibbs_ising": "background",
     "ising_exact": "background",
     "ising_energy": "background",

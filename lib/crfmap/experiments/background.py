@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from crfmap.checks import check_number
 from crfmap.errors import InputError
 
 MAX_EXACT_SITES = 20  # ising_exact enumerates 2**sites states
@@ -37,16 +38,6 @@ def _check_shape(shape) -> tuple:
     if len(shape) not in (1, 2) or min(shape) < 1:
         raise InputError("shape", f"expected a 1-D or 2-D lattice of at least one site, got {shape!r}")
     return shape
-
-
-def _check_number(value, name) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(name, f"expected a number, got {value!r}") from None
-    if not np.isfinite(v):
-        raise InputError(name, f"must be finite, got {value!r}")
-    return v
 
 
 def _neighbour_sum(spins: np.ndarray, ndim: int) -> np.ndarray:
@@ -76,7 +67,7 @@ def ising_energy(spins, coupling=1.0, field=0.0) -> float:
         raise InputError("spins", "expected a non-empty 1-D or 2-D array of -1/+1 spins")
     s = s.astype(np.float64)
     bonds = float((s * _neighbour_sum(s, s.ndim)).sum()) / 2.0  # each bond counted from both ends
-    return -_check_number(coupling, "coupling") * bonds - _check_number(field, "field") * float(s.sum())
+    return -check_number("coupling", coupling) * bonds - check_number("field", field) * float(s.sum())
 
 
 def ising_exact(shape, coupling=1.0, field=0.0):
@@ -92,8 +83,8 @@ def ising_exact(shape, coupling=1.0, field=0.0):
     [0.25, 0.25, 0.25, 0.25]
     """
     shape = _check_shape(shape)
-    coupling = _check_number(coupling, "coupling")
-    field = _check_number(field, "field")
+    coupling = check_number("coupling", coupling)
+    field = check_number("field", field)
     n = int(np.prod(shape))
     if n > MAX_EXACT_SITES:
         raise InputError("shape", f"{n} sites is too many to enumerate (at most {MAX_EXACT_SITES})")
@@ -139,8 +130,8 @@ def gibbs_ising(shape, coupling=1.0, field=0.0, *, sweeps=100, chains=None, seed
     True
     """
     shape = _check_shape(shape)
-    coupling = _check_number(coupling, "coupling")
-    field = _check_number(field, "field")
+    coupling = check_number("coupling", coupling)
+    field = check_number("field", field)
     if not (isinstance(sweeps, (int, np.integer)) and sweeps >= 0):
         raise InputError("sweeps", f"must be a non-negative integer, got {sweeps!r}")
     if chains is not None and not (isinstance(chains, (int, np.integer)) and chains >= 1):

@@ -18,12 +18,12 @@ True
 from __future__ import annotations
 
 import io
-import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
 
+from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.lbp import SCHEDULES, LBPResult, disc_region, infer
@@ -73,16 +73,11 @@ def _check_scene(scene):
 
 
 def _check_noise(noise):
-    if isinstance(noise, bool) or not isinstance(noise, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(noise) or noise < 0:
-        raise InputError("noise", f"must be a non-negative number, got {noise!r}")
-    return float(noise)
+    return check_number("noise", noise, low=0.0)
 
 
 def _check_seed(seed):
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError("seed", f"must be a non-negative integer, got {seed!r}")
-    return int(seed)
+    return check_int("seed", seed, low=0)
 
 
 @lru_cache(maxsize=32)
@@ -100,10 +95,8 @@ def _observe(scene, noise, seed):
     else:
         made = scenes.make_scene(scene)
     truth = made.truth
-    ox, oy, _ = truth.origin
-    extent = (ox, oy, ox + truth.width * truth.resolution, oy + truth.height * truth.resolution)
     recording = simulate(made, seed=seed, range_noise=noise, progress=False)
-    observed = build_grid(recording.scans, truth.resolution, extent=extent)
+    observed = build_grid(recording.scans, truth.resolution, bounds=truth.bounds())
     return Observation(made, observed, noise, "range C [m]", seed)
 
 
@@ -112,7 +105,7 @@ def observe(scene="x", noise=DEFAULT_NOISE, seed=0) -> Observation:
 
     ``"x"``: the UGM X with Gaussian image noise of sigma ``noise`` (:func:`crfmap.world.scenes.noisy_image`).
     Every other scene: the robot simulated in the scene's default mode with range noise
-    ``+-C``, C ~ U[0, ``noise``] [m], and the thesis's arctan grid built over the truth's extent.
+    ``+-C``, C ~ U[0, ``noise``] [m], and the thesis's arctan grid built over the truth's bounds.
     ``"office"`` is an 8 m x 6 m floor at 0.1 m whose layout is drawn from ``seed``.
     Results are cached (treat them as read-only).
 
@@ -126,18 +119,13 @@ def observe(scene="x", noise=DEFAULT_NOISE, seed=0) -> Observation:
 def _check_iterations(iterations):
     if iterations is None:
         return TO_CONVERGENCE
-    if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
-        raise InputError("iterations", f"must be a non-negative integer or None (to convergence), got {iterations!r}")
-    return int(iterations)
+    return check_int("iterations", iterations, low=0)
 
 
 def _check_radius(radius):
     if radius is None:
         return None
-    if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(radius) or radius <= 0:
-        raise InputError("radius", f"must be a positive number of metres or None (unbounded), got {radius!r}")
-    return float(radius)
+    return check_positive("radius", radius)
 
 
 def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",
@@ -196,7 +184,7 @@ def draw(ex: Exploration):
               f"\nMSE {ex.after.mse:.4f}")
     if ex.region is not None:
         axes[2].contour(ex.region.astype(float), levels=[0.5], colors="tab:red", linewidths=1.0,
-                        extent=truth.extent(), origin="lower")
+                        extent=truth.imshow_extent(), origin="lower")
         sx, sy = ex.observation.scene.start[:2]
         axes[2].plot([sx], [sy], marker="o", color="tab:red", markersize=4)
     curves = {}

@@ -17,7 +17,7 @@ sits on a plateau of the MSE (the beliefs are saturated), where the thesis's ste
 a local gradient both stall.
 
 >>> from crfmap.world.scenes import enclosed_boxes
->>> observed, recording = scan_scene(enclosed_boxes("train", size=20), mode="look", progress=False)
+>>> observed, recording = scan_scene(enclosed_boxes("train", size=20), drive="look", progress=False)
 >>> observed.shape, recording.scans.ranges.shape
 ((20, 20), (1, 360))
 """
@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.mapping.builder import build_grid
+from crfmap.checks import check_pair
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.lbp import LBPResult, infer
@@ -40,28 +41,26 @@ from crfmap.world.scenes import Scene
 
 # LBP on these 40 x 40 grids: one numba thread is faster than several (the work per
 # iteration is tiny) and keeps timings steady on a shared machine.
-CONVERGED = {"threads": 1}
+TO_CONVERGENCE = {"threads": 1}
 THESIS_TWO_ITERATIONS = {"schedule": "thesis", "max_iter": 2}  # the thesis's setting (sec. 4.1)
 SEARCH_STRENGTHS = (1.5, 2.0, 3.0, 5.0, 10.0)  # hidden [[a, 1], [1, a]]; 10 = the default
 SEARCH_BIASES = (0.5, 0.8, 1.0, 1.25, 2.0)  # link [[1, 0], [0, b]]; b > 1 leans unseen cells to empty
 
 
-def truth_extent(truth: OccupancyGrid) -> tuple:
-    """(xmin, ymin, xmax, ymax) [m] of a grid (yaw 0), to build another grid over the same cells.
+def truth_bounds(truth: OccupancyGrid) -> tuple:
+    """(xmin, ymin, xmax, ymax) [m] of an unrotated grid, to build another grid over the same cells.
 
-    >>> truth_extent(OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)))
+    >>> truth_bounds(OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)))
     (1.0, 2.0, 2.5, 3.0)
     """
     if not isinstance(truth, OccupancyGrid):
         raise InputError("truth", f"expected an OccupancyGrid, got {type(truth).__name__}")
     if truth.origin[2] != 0.0:
         raise InputError("truth", f"the grid is rotated (origin yaw {truth.origin[2]:g} rad); need yaw 0")
-    ox, oy, _ = truth.origin
-    return (float(ox), float(oy), float(ox + truth.width * truth.resolution),
-            float(oy + truth.height * truth.resolution))
+    return truth.bounds()
 
 
-def scan_scene(scene: Scene, laser=None, mode=None, *, model="arctan", seed=0, progress=False,
+def scan_scene(scene: Scene, laser=None, drive=None, *, model="arctan", seed=0, progress=False,
                **simulate_options) -> tuple:
     """Simulate the robot scanning ``scene`` and build the grid over the truth's cells.
 
@@ -69,11 +68,12 @@ def scan_scene(scene: Scene, laser=None, mode=None, *, model="arctan", seed=0, p
     ----------
     scene : crfmap.world.scenes.Scene
     laser : crfmap.sim.simulator.Laser or None (the simulator's default: 360 beams, 5 m)
-    mode : "look", "explore", "waypoints" or None (``scene.default_mode``)
+    drive : a drive of :mod:`crfmap.sim.drives` (``Look(turns=2)``), a mode name "look", "explore",
+        "waypoints" (that drive with its defaults) or None (``scene.default_mode``)
     model : "arctan" (thesis eq. 16) or "logodds"
     seed : int, passed to the simulator (only matters with noise)
     simulate_options : more keyword arguments of :func:`crfmap.sim.simulator.simulate`, e.g.
-        ``range_noise``, ``odometry_noise``, ``turns``; none means perfect sensors (the thesis)
+        ``range_noise``, ``odometry_noise``; none means perfect sensors (the thesis)
 
     Returns
     -------
@@ -85,11 +85,11 @@ def scan_scene(scene: Scene, laser=None, mode=None, *, model="arctan", seed=0, p
 
     if not isinstance(scene, Scene):
         raise InputError("scene", f"expected a crfmap.world.scenes.Scene, got {type(scene).__name__}")
-    recording: Recording = simulate(scene, laser, mode, seed=seed, progress=progress, **simulate_options)
+    recording: Recording = simulate(scene, laser, drive, seed=seed, progress=progress, **simulate_options)
     truth = scene.truth
-    observed = build_grid(recording.scans, truth.resolution, model=model, extent=truth_extent(truth),
+    observed = build_grid(recording.scans, truth.resolution, model=model, bounds=truth_bounds(truth),
                           progress=progress)
-    if observed.shape != truth.shape:  # the extent is exact, so this would be a builder bug
+    if observed.shape != truth.shape:  # the bounds are exact, so this would be a builder bug
         raise InputError("scene", f"built grid {observed.shape} does not match the truth {truth.shape}")
     observed.meta.update(scene=scene.name, mode=recording.meta["mode"])
     return observed, recording
@@ -121,17 +121,9 @@ class PipelineResult:
         return fpr, tpr, self.metrics.auc
 
 
-def _check_pair(observed, truth):
-    for name, grid in (("observed", observed), ("truth", truth)):
-        if not isinstance(grid, OccupancyGrid):
-            raise InputError(name, f"expected an OccupancyGrid, got {type(grid).__name__}")
-    if observed.shape != truth.shape:
-        raise InputError("truth", f"shape {truth.shape} does not match the observed grid's {observed.shape}")
-
-
 def score(grid: OccupancyGrid, truth: OccupancyGrid) -> PipelineResult:
     """Score a grid as it is (the "before LBP" row)."""
-    _check_pair(grid, truth)
+    check_pair(grid, truth, grids_only=True)
     return PipelineResult(grid, evaluate(grid, truth))
 
 
@@ -140,17 +132,17 @@ def evaluate_pipeline(observed: OccupancyGrid, truth: OccupancyGrid, hidden=DEFA
     """Run LBP on ``observed`` with these tables and score the beliefs against ``truth``.
 
     ``lbp_options`` are keyword arguments of :func:`crfmap.crf.lbp.infer` (default
-    :data:`CONVERGED`: run to convergence; :data:`THESIS_TWO_ITERATIONS` is the thesis's).
+    :data:`TO_CONVERGENCE`: run to convergence; :data:`THESIS_TWO_ITERATIONS` is the thesis's).
 
     >>> g = OccupancyGrid(np.array([[0.9, 0.5, 0.9]]))
     >>> r = evaluate_pipeline(g, OccupancyGrid(np.array([[1.0, 1.0, 1.0]])))
     >>> r.metrics.recall, r.lbp.converged
     (1.0, True)
     """
-    _check_pair(observed, truth)
+    check_pair(observed, truth, grids_only=True)
     hidden = check_table(hidden, "hidden")
     link = check_table(link, "link")
-    options = dict(CONVERGED if lbp_options is None else lbp_options)
+    options = dict(TO_CONVERGENCE if lbp_options is None else lbp_options)
     result = infer(observed, hidden, link, **options)
     return PipelineResult(result.beliefs, evaluate(result.beliefs, truth), result, hidden, link)
 
@@ -166,12 +158,12 @@ def search_tables(observed, truth, strengths=SEARCH_STRENGTHS, biases=SEARCH_BIA
     >>> table.shape
     (2, 2)
     """
-    _check_pair(observed, truth)
+    check_pair(observed, truth, grids_only=True)
     strengths = [float(a) for a in strengths]
     biases = [float(b) for b in biases]
     if not strengths or not biases or min(strengths) <= 0 or min(biases) <= 0:
         raise InputError("strengths/biases", "need at least one positive value of each")
-    options = dict(CONVERGED if lbp_options is None else lbp_options)
+    options = dict(TO_CONVERGENCE if lbp_options is None else lbp_options)
     table = np.array([[lbp_mse(observed, truth, [[a, 1.0], [1.0, a]], [[1.0, 0.0], [0.0, b]], options)
                        for b in biases] for a in strengths])
     i, j = np.unravel_index(int(np.argmin(table)), table.shape)
@@ -187,7 +179,7 @@ def learn_search_gradient(observed, truth, *, strengths=SEARCH_STRENGTHS, biases
     ``mse_before`` is the MSE of the default tables, ``mse_after`` the learned one; ``trace``
     starts with one row per searched (a, b), then the gradient learner's rows.
     """
-    options = dict(CONVERGED if lbp_options is None else lbp_options)
+    options = dict(TO_CONVERGENCE if lbp_options is None else lbp_options)
     before = lbp_mse(observed, truth, DEFAULT_HIDDEN, DEFAULT_LINK, options)
     hidden0, link0, table = search_tables(observed, truth, strengths, biases, options)
     fine = learn_gradient(observed, truth, hidden0, link0, lbp_options=options, progress=progress, **gradient_options)
@@ -234,18 +226,18 @@ def train_and_test(train: tuple, test: tuple, learners: dict, lbp_settings=None,
     learners : name -> callable(observed, truth, lbp_options) returning a LearningResult,
         e.g. ``{"thesis": lambda o, t, opts: learn_thesis(o, t, lbp_options=opts)}``
     lbp_settings : name -> keyword arguments of :func:`crfmap.crf.lbp.infer`; default
-        ``{"converged": CONVERGED, "thesis 2 iterations": THESIS_TWO_ITERATIONS}``
+        ``{"converged": TO_CONVERGENCE, "thesis 2 iterations": THESIS_TWO_ITERATIONS}``
 
     Returns
     -------
     TrainTest
     """
-    settings = dict(lbp_settings or {"converged": CONVERGED, "thesis 2 iterations": THESIS_TWO_ITERATIONS})
+    settings = dict(lbp_settings or {"converged": TO_CONVERGENCE, "thesis 2 iterations": THESIS_TWO_ITERATIONS})
     grids = {"train": train, "test": test}
     for env, pair in grids.items():
         if not (isinstance(pair, tuple) and len(pair) == 2):
             raise InputError(env, "expected a pair (observed grid, truth grid)")
-        _check_pair(*pair)
+        check_pair(*pair, grids_only=True)
     if not learners:
         raise InputError("learners", "give at least one learner")
     out = TrainTest(observed={k: v[0] for k, v in grids.items()}, truth={k: v[1] for k, v in grids.items()},

@@ -2,7 +2,7 @@
 
 Public API (imported on first use, so ``import crfmap.mapping`` stays cheap):
 
-- :mod:`crfmap.mapping.builder`: ``build_grid``, ``count_hits``, ``HitCounter``, ``scan_extent``, ``arctan_probability``, ``logodds_to_probability``
+- :mod:`crfmap.mapping.builder`: ``build_grid``, ``count_hits``, ``HitCounter``, ``scan_bounds``, ``arctan_probability``, ``logodds_to_probability``
 - :mod:`crfmap.mapping.online`: ``OnlineMapper``, ``ScanUpdate``
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ _API = {
     "build_grid": "builder",
     "count_hits": "builder",
     "HitCounter": "builder",
-    "scan_extent": "builder",
+    "scan_bounds": "builder",
     "arctan_probability": "builder",
     "logodds_to_probability": "builder",
     "OnlineMapper": "online",

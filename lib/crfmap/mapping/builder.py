@@ -27,7 +27,7 @@ from crfmap.checks import check_positive as _positive
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid
 
-EXTENT_PADDING = 0.5  # [m] margin around poses and end points when the extent comes from the data
+BOUNDS_PADDING = 0.5  # [m] margin around poses and end points when the bounds come from the data
 MAX_CELLS = 100_000_000  # a bigger grid is almost surely a unit mistake (and would not fit in memory)
 PROGRESS_CHUNK = 64  # scans per kernel call when a progress bar is shown
 _NO_STAMP = np.zeros((0, 0), np.int32)  # the hit kernel lists no touched cells
@@ -71,12 +71,12 @@ def _free_range(free_on_no_return, range_max, source):
     return _positive("free_on_no_return", free_on_no_return)
 
 
-def scan_extent(scans, free_on_no_return=False, max_range_is_no_return=True, padding=EXTENT_PADDING):
+def scan_bounds(scans, free_on_no_return=False, max_range_is_no_return=True, padding=BOUNDS_PADDING):
     """(xmin, ymin, xmax, ymax) [m] holding every laser position and used beam end, padded.
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[1.0]], np.float32), 0.0, 0.0, 0.1, 5.0, np.zeros((1, 3)), np.zeros(1))
-    >>> scan_extent(s, padding=0.0)
+    >>> scan_bounds(s, padding=0.0)
     (0.0, 0.0, 1.0, 0.0)
     """
     source, ranges, poses = _check_scans(scans)
@@ -95,30 +95,30 @@ def scan_extent(scans, free_on_no_return=False, max_range_is_no_return=True, pad
     return (float(xs.min() - padding), float(ys.min() - padding), float(xs.max() + padding), float(ys.max() + padding))
 
 
-def _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return):
+def _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return):
     """Checked inputs plus the grid's origin and shape."""
     source, ranges, poses = _check_scans(scans)
     resolution = _positive("resolution", resolution)
-    if extent is None:
-        xmin, ymin, xmax, ymax = scan_extent(scans, free_on_no_return, max_range_is_no_return)
+    if bounds is None:
+        xmin, ymin, xmax, ymax = scan_bounds(scans, free_on_no_return, max_range_is_no_return)
         # Snap to multiples of the resolution so grids of one data set line up.
         # (rounded to 1e-9 m so 0.05 m steps print as -20.4, not -20.400000000000002).
         xmin = round(math.floor(xmin / resolution) * resolution, 9)
         ymin = round(math.floor(ymin / resolution) * resolution, 9)
     else:
         try:
-            xmin, ymin, xmax, ymax = (float(v) for v in extent)
+            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
         except (TypeError, ValueError):
-            raise InputError("extent", f"expected (xmin, ymin, xmax, ymax) in metres, got {extent!r}") from None
+            raise InputError("bounds", f"expected (xmin, ymin, xmax, ymax) in metres, got {bounds!r}") from None
         if not all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)) or xmax <= xmin or ymax <= ymin:
-            raise InputError("extent", f"need finite xmin < xmax and ymin < ymax, got {extent!r}")
+            raise InputError("bounds", f"need finite xmin < xmax and ymin < ymax, got {bounds!r}")
     width = max(1, int(math.ceil((xmax - xmin) / resolution - 1e-9)))
     height = max(1, int(math.ceil((ymax - ymin) / resolution - 1e-9)))
     if width * height > MAX_CELLS:
         raise InputError(
             "resolution",
             f"a {width} x {height} grid ({width * height:,} cells) at {resolution:g} m is too large; "
-            f"use a coarser resolution or a smaller extent",
+            f"use a coarser resolution or a smaller area",
         )
     u = (poses[:, 0] - xmin) / resolution
     v = (poses[:, 1] - ymin) / resolution
@@ -126,7 +126,7 @@ def _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_retu
     if outside.any():
         i = int(np.argmax(outside))
         raise InputError(
-            "extent" if extent is not None else source,
+            "bounds" if bounds is not None else source,
             f"laser pose of scan {i} at ({poses[i, 0]:.3f}, {poses[i, 1]:.3f}) m lies outside the grid "
             f"x [{xmin:g}, {xmin + width * resolution:g}], y [{ymin:g}, {ymin + height * resolution:g}]",
         )
@@ -169,21 +169,21 @@ def _hits(g, progress):
     return occupied, empty, used
 
 
-def count_hits(scans, resolution, extent=None, free_on_no_return=False, max_range_is_no_return=True,
+def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_range_is_no_return=True,
                progress=False):
     """Occupied and empty hit counts per cell, ``[y, x]`` int32 arrays (thesis sec. 3.2).
 
-    The grid's lower-left corner is ``extent[:2]`` when an extent is given, else the
-    data's padded bounding box (:func:`scan_extent`) snapped down to multiples of
+    The grid's lower-left corner is ``bounds[:2]`` when bounds are given, else the
+    data's padded bounding box (:func:`scan_bounds`) snapped down to multiples of
     ``resolution`` (the origin :func:`build_grid` reports).
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
-    >>> occ, emp = count_hits(s, 0.1, extent=(0, 0, 0.5, 0.1))
+    >>> occ, emp = count_hits(s, 0.1, bounds=(0, 0, 0.5, 0.1))
     >>> occ.tolist(), emp.tolist()
     ([[0, 0, 0, 0, 1]], [[1, 1, 1, 1, 0]])
     """
-    g = _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
+    g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
     occupied, empty, _ = _hits(g, progress)
     return occupied, empty
 
@@ -197,7 +197,7 @@ class HitCounter:
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
-    >>> counter = HitCounter.for_scans(s, 0.1, extent=(0, 0, 0.5, 0.1))
+    >>> counter = HitCounter.for_scans(s, 0.1, bounds=(0, 0, 0.5, 0.1))
     >>> counter.add_scan(s.ranges[0], s.laser_poses[0]).tolist()  # the cells it touched, (x, y)
     [[0, 0], [1, 0], [2, 0], [3, 0], [4, 0]]
     >>> counter.occupied.tolist(), counter.empty.tolist()
@@ -221,29 +221,29 @@ class HitCounter:
         self._touched = np.empty((min(self.width * self.height, len(self.angles) * len(self._buf)), 2), np.int64)
 
     @classmethod
-    def for_scans(cls, scans, resolution, extent=None, free_on_no_return=False,
+    def for_scans(cls, scans, resolution, bounds=None, free_on_no_return=False,
                   max_range_is_no_return=True) -> "HitCounter":
         """A counter for a recording's sensor, on the grid :func:`build_grid` would make of it."""
-        g = _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
+        g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
         g["frame_id"] = getattr(scans, "frame_id", "map") or "map"
         return cls(g)
 
     @classmethod
-    def for_sensor(cls, extent, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
+    def for_sensor(cls, bounds, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
                    free_on_no_return=False, max_range_is_no_return=True, frame_id="map") -> "HitCounter":
-        """A counter for a grid over ``extent`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
+        """A counter for a grid over ``bounds`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
         from crfmap.recording import ScanSet
 
         try:
-            xmin, ymin, xmax, ymax = (float(v) for v in extent)
+            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
         except (TypeError, ValueError):
-            raise InputError("extent", f"expected (xmin, ymin, xmax, ymax) in metres, got {extent!r}") from None
+            raise InputError("bounds", f"expected (xmin, ymin, xmax, ymax) in metres, got {bounds!r}") from None
         if not (isinstance(n_beams, (int, np.integer)) and n_beams >= 1):
             raise InputError("n_beams", f"must be a positive integer, got {n_beams!r}")
         centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
         probe = ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
                         range_max, centre, np.zeros(1), frame_id=frame_id, source="sensor")
-        return cls.for_scans(probe, resolution, extent, free_on_no_return, max_range_is_no_return)
+        return cls.for_scans(probe, resolution, bounds, free_on_no_return, max_range_is_no_return)
 
     def add_scan(self, ranges, laser_pose) -> np.ndarray:
         """Count one scan's hits (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map).
@@ -294,7 +294,7 @@ def logodds_to_probability(logodds):
     return 0.5 * (1.0 + np.tanh(0.5 * np.asarray(logodds, np.float64)))
 
 
-def build_grid(scans, resolution, model="arctan", extent=None, free_on_no_return=False,
+def build_grid(scans, resolution, model="arctan", bounds=None, free_on_no_return=False,
                max_range_is_no_return=True, p_hit=0.7, p_miss=0.4, logodds_limit=5.0,
                progress=False) -> OccupancyGrid:
     """Occupancy grid from scans with known laser poses.
@@ -307,9 +307,9 @@ def build_grid(scans, resolution, model="arctan", extent=None, free_on_no_return
         Cell size [m].
     model : {'arctan', 'logodds'}
         The thesis's hit-count model (eq. 16) or the log-odds baseline.
-    extent : None or (xmin, ymin, xmax, ymax)
-        Area [m] to map; by default the data's bounding box plus ``EXTENT_PADDING``.
-        Beams leaving a given extent are cut at its edge (no occupied hit there).
+    bounds : None or (xmin, ymin, xmax, ymax)
+        Area [m] to map; by default the data's bounding box plus ``BOUNDS_PADDING``.
+        Beams leaving given bounds are cut at its edge (no occupied hit there).
     free_on_no_return : False, True or float
         Range [m] up to which a no-return beam (+Inf, or range_max when
         ``max_range_is_no_return``) marks cells free; True means ``range_max``.
@@ -330,12 +330,12 @@ def build_grid(scans, resolution, model="arctan", extent=None, free_on_no_return
     --------
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
-    >>> build_grid(s, 0.1, extent=(0, 0, 0.5, 0.1)).probability.round(2).tolist()
+    >>> build_grid(s, 0.1, bounds=(0, 0, 0.5, 0.1)).probability.round(2).tolist()
     [[0.25, 0.25, 0.25, 0.25, 0.75]]
     """
     if model not in ("arctan", "logodds"):
         raise InputError("model", f"expected 'arctan' or 'logodds', got {model!r}")
-    g = _geometry(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
+    g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
     meta = {"model": model, "scans": len(g["ranges"]), "source": g["source"],
             "free_on_no_return": g["free_range"] or None}
     if model == "arctan":

@@ -131,21 +131,21 @@ class OnlineMapper:
 
     # --- construction -----------------------------------------------------------------------------
     @classmethod
-    def for_scans(cls, scans: ScanSet, resolution, extent=None, free_on_no_return=False,
+    def for_scans(cls, scans: ScanSet, resolution, bounds=None, free_on_no_return=False,
                   max_range_is_no_return=True, **options) -> "OnlineMapper":
         """A mapper for a recording's sensor on the grid :func:`crfmap.mapping.builder.build_grid` would make.
 
-        ``extent`` None takes the data's extent as the builder does, so the final
+        ``bounds`` None takes the data's bounding box as the builder does, so the final
         :meth:`observations` equal ``build_grid(scans, resolution)`` cell for cell.
         """
-        hits = builder.HitCounter.for_scans(scans, resolution, extent, free_on_no_return, max_range_is_no_return)
+        hits = builder.HitCounter.for_scans(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
         return cls(hits, **options)
 
     @classmethod
-    def for_sensor(cls, extent, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
+    def for_sensor(cls, bounds, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
                    free_on_no_return=False, max_range_is_no_return=True, **options) -> "OnlineMapper":
-        """A mapper for a grid over ``extent`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
-        hits = builder.HitCounter.for_sensor(extent, resolution, angle_min, angle_increment, n_beams, range_min,
+        """A mapper for a grid over ``bounds`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
+        hits = builder.HitCounter.for_sensor(bounds, resolution, angle_min, angle_increment, n_beams, range_min,
                                              range_max, free_on_no_return, max_range_is_no_return)
         return cls(hits, **options)
 

@@ -82,3 +82,15 @@ def save_table(name: str, header, rows, digits: int = 4, caption: str = "") -> P
         Path(tmp).write_text(text)
     save_numbers(name, {"header": list(header), "rows": [list(r) for r in rows], "caption": caption})
     return target
+
+
+def show_table(table) -> "IPython.display.Markdown":  # noqa: F821
+    """A saved table (its name, or the path :func:`save_table` returned) rendered in a notebook.
+
+    Returns an ``IPython.display.Markdown`` object: as a cell's last expression (or passed to
+    ``display``) Jupyter renders it as a table with its caption, not as pipe text.
+    """
+    from IPython.display import Markdown
+
+    target = Path(table) if isinstance(table, Path) else paths.GENERATED / f"{table}.md"
+    return Markdown(target.read_text())

@@ -37,7 +37,7 @@ import numpy as np
 from numba import njit
 
 from crfmap.sim.planning import coverage_tour, grid_path, segment_clear, simplify
-from crfmap.checks import check_number as _number
+from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.frames import TWO_PI, wrap_angle
 from crfmap.world.reachability import pose_cell, reachable, traversable
@@ -128,8 +128,8 @@ class _Planner:
 
 
 def _check_speeds(dt, linear_speed, angular_speed):
-    return (_number("dt", dt, 0.0, low_open=True), _number("linear_speed", linear_speed, 0.0, low_open=True),
-            _number("angular_speed", angular_speed, 0.0, low_open=True))
+    return (check_positive("dt", dt), check_positive("linear_speed", linear_speed),
+            check_positive("angular_speed", angular_speed))
 
 
 def explore_reachable(scene: Scene, laser: Laser, *, start=None, robot_radius=None, stride=1, dt=0.1,
@@ -147,11 +147,10 @@ def explore_reachable(scene: Scene, laser: Laser, *, start=None, robot_radius=No
     True
     """
     dt, linear_speed, angular_speed = _check_speeds(dt, linear_speed, angular_speed)
-    if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
-        raise InputError("stride", f"must be a positive integer, got {stride!r}")
+    stride = check_int("stride", stride, low=1)
     grid = scene.truth
     start = tuple(float(v) for v in (scene.start if start is None else start))
-    radius = scene.robot_radius if robot_radius is None else _number("robot_radius", robot_radius, 0.0)
+    radius = scene.robot_radius if robot_radius is None else check_number("robot_radius", robot_radius, low=0.0)
     can_reach = reachable(grid, start, radius)
     sx, sy = pose_cell(grid, start)
     tour = coverage_tour(can_reach, sx, sy)
@@ -186,8 +185,7 @@ def look_around(scene: Scene, laser: Laser, *, start=None, dt=0.1, angular_speed
     (4, -90.0)
     """
     dt, _, angular_speed = _check_speeds(dt, 1.0, angular_speed)
-    if isinstance(turns, bool) or not isinstance(turns, (int, np.integer)) or turns < 1:
-        raise InputError("turns", f"must be a positive integer, got {turns!r}")
+    turns = check_int("turns", turns, low=1)
     start = tuple(float(v) for v in (scene.start if start is None else start))
     pose_cell(scene.truth, start)
     plan = _Planner(start, dt, 1.0, angular_speed)
@@ -235,10 +233,10 @@ def follow_waypoints(scene: Scene, laser: Laser, waypoints=None, *, start=None, 
     True
     """
     dt, linear_speed, angular_speed = _check_speeds(dt, linear_speed, angular_speed)
-    scan_period = _number("scan_period", scan_period, 0.0, low_open=True)
+    scan_period = check_positive("scan_period", scan_period)
     grid = scene.truth
     start = tuple(float(v) for v in (scene.start if start is None else start))
-    radius = scene.robot_radius if robot_radius is None else _number("robot_radius", robot_radius, 0.0)
+    radius = scene.robot_radius if robot_radius is None else check_number("robot_radius", robot_radius, low=0.0)
     if waypoints is None:
         waypoints = scene.waypoints
     if waypoints is None:

@@ -18,16 +18,19 @@ reads ``a +- C_yaw`` (the thesis's noise "at each interval of movement", Fig. 16
 that do not turn add no error. Odometry starts at (0, 0, 0) in ``odom``; ``map -> odom``
 is the start pose (``recording.meta["map_to_odom"]``).
 
-Modes (:func:`simulate`): ``"explore"`` (:func:`~crfmap.sim.motion.explore_reachable`, visit every
-reachable cell and look around), ``"look"`` (:func:`~crfmap.sim.motion.look_around`, turn in place
-at the start, Fig. 28) and ``"waypoints"`` (:func:`~crfmap.sim.motion.follow_waypoints`, drive
-through waypoints, scanning at a fixed rate). The drives, :class:`~crfmap.sim.motion.Motion`,
-``compose`` and ``wrap_angle`` are importable from here too.
+Drives (:mod:`crfmap.sim.drives`, the ``drive`` of :func:`simulate`): :class:`Explore` (visit every
+reachable cell and look around), :class:`Look` (turn in place at the start, Fig. 28) and
+:class:`Waypoints` (drive through waypoints, scanning at a fixed rate); each holds only its own
+settings, and a mode name (``"explore"``, ``"look"``, ``"waypoints"``) means its drive with the
+defaults. The drives, :class:`~crfmap.sim.motion.Motion`, ``compose`` and ``wrap_angle`` are
+importable from here too.
 
 >>> from crfmap.world.scenes import enclosed_boxes
->>> rec = simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), mode="look", progress=False)
+>>> rec = simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), "look", progress=False)
 >>> rec.scans.ranges.shape
 (1, 90)
+>>> simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), Look(turns=2), progress=False).scans.ranges.shape
+(2, 90)
 """
 from __future__ import annotations
 
@@ -41,14 +44,17 @@ from crfmap.errors import InputError
 from crfmap.frames import TWO_PI, compose
 from crfmap.frames import wrap_angle  # noqa: F401  (re-exported)
 from crfmap.grid import OccupancyGrid
-from crfmap.sim.motion import ALIGNED, Motion, _integrate, _number, explore_reachable, follow_waypoints, look_around  # noqa: F401
+from crfmap.checks import check_number
+from crfmap.sim.drives import DRIVE_SETTINGS, Explore, Look, Waypoints, drive_for  # noqa: F401  (re-exported)
+from crfmap.sim.motion import ALIGNED, Motion, _integrate, explore_reachable, follow_waypoints, look_around  # noqa: F401
 from crfmap.raycast import first_hit_kernel
 from crfmap.world.reachability import pose_cell, reachable, traversable  # noqa: F401  (re-exported)
 from crfmap.sim.laser import LEGACY_NO_RETURN, Laser  # noqa: F401  (re-exported)
 from crfmap.recording import Recording, ScanSet, Trajectory
-from crfmap.world.scenes import MODES, Scene
+from crfmap.world.scenes import Scene
 
 SCAN_CHUNK = 512  # scans per progress-bar tick
+DEFAULT_LINEAR_SPEED = 0.5  # [m/s]
 PROGRESS_BEAMS = 2_000_000  # beams in a run above which simulate() shows a progress bar (below, it is too quick)
 
 
@@ -126,8 +132,8 @@ def add_range_noise(ranges, bound=0.0, sigma=0.0, rng=None) -> np.ndarray:
     >>> bool(abs(r[0, 0] - 1.0) <= 0.1), float(r[0, 1])
     (True, inf)
     """
-    bound = _number("range_noise", bound, 0.0)
-    sigma = _number("range_sigma", sigma, 0.0)
+    bound = check_number("range_noise", bound, low=0.0)
+    sigma = check_number("range_sigma", sigma, low=0.0)
     rng = np.random.default_rng(rng)
     ranges = np.array(ranges, dtype=np.float64)
     sign = rng.choice(np.array([-1.0, 1.0]), size=ranges.shape)
@@ -143,32 +149,33 @@ def _odometry_noise(value):
     if isinstance(value, (tuple, list, np.ndarray)):
         if len(value) != 2:
             raise InputError("odometry_noise", f"expected C or (C_lin [m], C_yaw [rad]), got {value!r}")
-        return _number("odometry_noise", value[0], 0.0), _number("odometry_noise", value[1], 0.0)
-    c = _number("odometry_noise", value, 0.0)
+        return check_number("odometry_noise", value[0], low=0.0), check_number("odometry_noise", value[1], low=0.0)
+    c = check_number("odometry_noise", value, low=0.0)
     return c, 0.0
 
 
-def simulate(scene: Scene, laser: Laser | None = None, mode: str | None = None, *, seed=0, range_noise=0.0,
-             range_sigma=0.0, odometry_noise=0.0, laser_mount=(0.0, 0.0, 0.0), start=None, robot_radius=None,
-             stride=1, waypoints=None, dt=0.1, linear_speed=0.5, angular_speed=1.5, scan_period=0.2, turns=1,
-             t0=0.0, progress=True) -> Recording:
+def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, range_noise=0.0, range_sigma=0.0,
+             odometry_noise=0.0, laser_mount=(0.0, 0.0, 0.0), start=None, dt=0.1, linear_speed=None,
+             angular_speed=1.5, t0=0.0, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
     Parameters
     ----------
     scene : Scene
     laser : Laser (default ``Laser()``: 360 beams over 360 deg, 0.05-5 m)
-    mode : "explore", "look" or "waypoints" (default ``scene.default_mode``)
+    drive : :class:`Explore`, :class:`Look`, :class:`Waypoints`, or a mode name ``"explore"``,
+        ``"look"``, ``"waypoints"`` meaning that drive with its defaults (default: ``scene.default_mode``).
+        Mode-specific settings (``stride``, ``turns``, ``waypoints``, ``scan_period``,
+        ``robot_radius``) belong to the drive; given here they are an InputError.
     seed : int, all noise comes from ``np.random.default_rng(seed)``
     range_noise : float C [m], ranges read ``d +- c``, ``c`` ~ U[0, C]
     range_sigma : float [m], extra Gaussian range noise
     odometry_noise : C [m] or (C_lin [m], C_yaw [rad]) per step: odometry reads each
         executed translation ``+- c`` (and each executed turn ``+- c_yaw``); 0 = perfect odometry
     laser_mount : (x, y, yaw) of the laser in base_link
-    stride : explore: look around only at cells farther than ``stride - 1`` cells from the last
-    waypoints : (k, 2) [m], waypoints mode (default ``scene.waypoints``)
-    dt : float [s] per Twist command; ``linear_speed`` [m/s], ``angular_speed`` [rad/s] limits
-    scan_period : float [s], waypoints mode; ``turns``: look mode
+    start : (x, y, yaw) [m, rad] or None (``scene.start``)
+    dt : float [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which
+        only turns), ``angular_speed`` [rad/s] limits
     t0 : float [s], stamp of the first pose
     progress : bool, show a progress bar for the ray casting
 
@@ -179,30 +186,28 @@ def simulate(scene: Scene, laser: Laser | None = None, mode: str | None = None, 
     commanded), ``laser_mount``, ``ground_truth = scene.truth`` and ``meta`` (all settings,
     ``map_to_odom``). Identical for identical arguments.
     """
+    for name in misplaced:
+        if name in DRIVE_SETTINGS:
+            raise InputError(name, f"belongs to the drive: pass drive={DRIVE_SETTINGS[name]}({name}=...)")
+        raise TypeError(f"simulate() got an unexpected keyword argument {name!r}")
     if not isinstance(scene, Scene):
         raise InputError("scene", f"expected a crfmap.world.scenes.Scene, got {type(scene).__name__}")
     laser = Laser() if laser is None else laser
     if not isinstance(laser, Laser):
         raise InputError("laser", f"expected a crfmap.sim.simulator.Laser, got {type(laser).__name__}")
-    mode = scene.default_mode if mode is None else mode
-    if mode not in MODES:
-        raise InputError("mode", f"must be one of {', '.join(MODES)}, got {mode!r}")
+    drive = drive_for(scene.default_mode if drive is None else drive)
+    if linear_speed is not None and isinstance(drive, Look):
+        raise InputError("linear_speed", "does not apply to the look drive: the robot only turns in place")
+    linear_speed = DEFAULT_LINEAR_SPEED if linear_speed is None else linear_speed
     c_lin, c_yaw = _odometry_noise(odometry_noise)
-    t0 = _number("t0", t0)
-    mount = np.array([_number("laser_mount", v) for v in laser_mount], dtype=np.float64)
+    t0 = check_number("t0", t0)
+    mount = np.array([check_number("laser_mount", v) for v in laser_mount], dtype=np.float64)
     if mount.shape != (3,):
         raise InputError("laser_mount", f"expected (x, y, yaw), got {laser_mount!r}")
     start = tuple(float(v) for v in (scene.start if start is None else start))
     if len(start) != 3:
         raise InputError("start", f"expected (x, y, yaw), got {start!r}")
-    if mode == "explore":
-        motion = explore_reachable(scene, laser, start=start, robot_radius=robot_radius, stride=stride, dt=dt,
-                                   linear_speed=linear_speed, angular_speed=angular_speed)
-    elif mode == "look":
-        motion = look_around(scene, laser, start=start, dt=dt, angular_speed=angular_speed, turns=turns)
-    else:
-        motion = follow_waypoints(scene, laser, waypoints, start=start, robot_radius=robot_radius, dt=dt,
-                                  linear_speed=linear_speed, angular_speed=angular_speed, scan_period=scan_period)
+    motion = drive.motion(scene, laser, start=start, dt=dt, linear_speed=linear_speed, angular_speed=angular_speed)
 
     rng = np.random.default_rng(seed)
     n = len(motion)
@@ -242,7 +247,7 @@ def simulate(scene: Scene, laser: Laser | None = None, mode: str | None = None, 
         "simulator": "crfmap.sim.simulator",
         "scene": scene.name,
         "scene_description": scene.description,
-        "mode": mode,
+        "mode": drive.mode,
         "seed": seed,
         "range_noise": float(range_noise),
         "range_sigma": float(range_sigma),
@@ -251,7 +256,7 @@ def simulate(scene: Scene, laser: Laser | None = None, mode: str | None = None, 
         "angle_max": laser.angle_max,
         "dt": motion.dt,
         "map_to_odom": start,
-        "robot_radius": scene.robot_radius if robot_radius is None else float(robot_radius),
+        "robot_radius": scene.robot_radius if getattr(drive, "robot_radius", None) is None else drive.robot_radius,
     }
     return Recording(scans=scans, laser_mount=tuple(float(v) for v in mount), odometry=odometry,
                      true_poses=true_poses, cmd_vel=cmd_vel, ground_truth=scene.truth, meta=meta)

@@ -11,13 +11,13 @@ reach from the start.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
+from crfmap.checks import check_positive
 from crfmap.errors import InputError
 from crfmap.world.reachability import pose_cell, reachable
-from crfmap.world.scene import Scene, check_resolution, scene_grid
+from crfmap.world.scene import Scene, scene_grid
 
 
 
@@ -59,10 +59,8 @@ def office_floor(width_m=20.0, height_m=15.0, resolution=0.05, seed=0, robot_rad
     >>> s.truth.shape, len(s.waypoints) >= 2
     ((100, 120), True)
     """
-    res = check_resolution(resolution)
-    for name, v in (("width_m", width_m), ("height_m", height_m)):
-        if not (isinstance(v, (int, float, np.floating)) and math.isfinite(v) and v > 0):
-            raise InputError(name, f"must be a positive number of metres, got {v!r}")
+    res = check_positive("resolution", resolution)
+    check_positive("width_m", width_m), check_positive("height_m", height_m)
     rng = np.random.default_rng(seed)
     cells_of = lambda metres, least=1: max(least, int(round(metres / res)))  # noqa: E731
     t = cells_of(0.15)  # wall

@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
+from crfmap.checks import check_number
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
@@ -70,8 +71,7 @@ def traversable(truth, robot_radius=0.0) -> np.ndarray:
     grid = _grid_of(truth)
     if not isinstance(grid, OccupancyGrid):
         grid = OccupancyGrid(np.asarray(truth, dtype=float))
-    if not (isinstance(robot_radius, (int, float, np.floating)) and math.isfinite(robot_radius) and robot_radius >= 0):
-        raise InputError("robot_radius", f"must be a non-negative number of metres, got {robot_radius!r}")
+    robot_radius = check_number("robot_radius", robot_radius, low=0.0)
     occ = grid.probability > 0.5
     offsets = footprint_offsets(robot_radius, grid.resolution)
     k = int(np.abs(offsets).max())

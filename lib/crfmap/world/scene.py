@@ -5,12 +5,10 @@ Kept apart from :mod:`crfmap.world.scenes` (the thesis's scenes) and :mod:`crfma
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.world.reachability import pose_cell
 
@@ -44,12 +42,6 @@ class Scene:
         """(ix, iy) of the cell holding the start pose."""
         return pose_cell(self.truth, self.start)
 
-
-
-def check_resolution(resolution) -> float:
-    if not (isinstance(resolution, (int, float, np.floating)) and math.isfinite(resolution) and resolution > 0):
-        raise InputError("resolution", f"must be a positive number of metres per cell, got {resolution!r}")
-    return float(resolution)
 
 
 def scene_grid(cells, resolution, **meta) -> OccupancyGrid:

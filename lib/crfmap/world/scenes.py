@@ -35,10 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from crfmap.checks import check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.world.office import office_floor
-from crfmap.world.scene import MODES, Scene, check_resolution, scene_grid  # noqa: F401  (re-exported)
+from crfmap.world.scene import MODES, Scene, scene_grid  # noqa: F401  (re-exported)
 from crfmap.world.reachability import footprint_offsets, pose_cell, reachable, traversable  # noqa: F401  (re-exported)
 
 X_IMAGE_FILE = "images/ugm_X_32x32.csv"  # 1 = white background, 0 = X stroke (UGM's X.mat)
@@ -130,7 +131,7 @@ def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
             raise InputError("shape", f"expected an int or (height, width), got {shape!r}") from None
     if h < 4 or w < 4:
         raise InputError("shape", f"the X needs at least 4x4 cells, got {h}x{w}")
-    resolution = check_resolution(resolution)
+    resolution = check_positive("resolution", resolution)
     if paths.have_data(X_IMAGE_FILE):
         path = paths.data_file(X_IMAGE_FILE)
         try:
@@ -187,8 +188,7 @@ def noisy_image(truth, noise=0.4, seed=0, model="gaussian") -> OccupancyGrid:
     p = grid.probability
     if not np.isin(p, (0.0, 1.0)).all():
         raise InputError("truth", "expected a 0/1 ground-truth image")
-    if not (isinstance(noise, (int, float, np.floating)) and math.isfinite(noise) and noise >= 0):
-        raise InputError("noise", f"must be a non-negative number, got {noise!r}")
+    noise = check_number("noise", noise, low=0.0)
     rng = np.random.default_rng(seed)
     if model == "gaussian":
         observed = np.clip(p + rng.normal(0.0, float(noise), p.shape), 0.0, 1.0)
@@ -237,7 +237,7 @@ def occluded_walls(variant="train", size=THESIS_SIZE, resolution=THESIS_RESOLUTI
     (2, 37)
     """
     variant = _check_variant(variant)
-    resolution = check_resolution(resolution)
+    resolution = check_positive("resolution", resolution)
     size = _check_size(size)
     rng = np.random.default_rng(seed) if seed is not None else None
     scale = size / THESIS_SIZE
@@ -312,7 +312,7 @@ def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=T
     True
     """
     variant = _check_variant(variant)
-    resolution = check_resolution(resolution)
+    resolution = check_positive("resolution", resolution)
     size = _check_size(size)
     scale = size / THESIS_SIZE
     if seed is None:
