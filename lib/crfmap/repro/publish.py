@@ -30,6 +30,8 @@ TYPST_OPTIONS = {"ignore_system_fonts": True}
 # Typst set-up placed before the body: A4, small type for the wide tables, figures numbered by their
 # own captions (the thesis's numbers), not by Typst's counter.
 TYPST_HEADER = """\
+#let horizontalrule = line(start: (25%, 0%), end: (75%, 0%))
+#show terms.item: it => block(breakable: false)[#text(weight: "bold")[#it.term] #it.description]
 #set page(paper: "a4", margin: (x: 1.6cm, y: 1.8cm), numbering: "1")
 #set text(size: 9.5pt)
 #set par(justify: true)
