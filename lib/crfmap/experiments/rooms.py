@@ -100,28 +100,33 @@ def graph_cut_available() -> bool:
     return importlib.util.find_spec("maxflow") is not None
 
 
+def baselines(scans, truth, observed) -> dict:
+    """name -> grid of the methods that are not LBP: raw arctan grid, log-odds grid, 3x3 neighbour mean,
+    and the graph-cut MAP labelling with the default tables (only when PyMaxflow is installed)."""
+    out = {"raw arctan grid (no LBP)": observed,
+           "log-odds grid (no LBP)": padded_grid(scans, truth, model="logodds"),
+           "3x3 neighbour mean": neighbour_mean3(observed)}
+    if graph_cut_available():
+        from crfmap.bench.external import graph_cut_map
+
+        occupied, _ = graph_cut_map(observed.probability, DEFAULT_HIDDEN, DEFAULT_LINK)
+        out["graph-cut MAP (default tables)"] = observed.with_probability(occupied.astype(float))
+    return out
+
+
 def methods(scans, truth, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, learned=None) -> dict:
-    """name -> predicted grid (P(occupied)) for one room: baselines, LBP converged and 2 iterations.
+    """name -> predicted grid (P(occupied)) for one room: :func:`baselines`, LBP converged and 2 iterations.
 
     ``learned``: (hidden, link) learned elsewhere; adds converged LBP with them, once with the
     thesis's pairing (rows = receiving cell) and once with the proper pairwise ("oriented") one.
     """
-    out = {
-        "raw arctan grid (no LBP)": observed,
-        "log-odds grid (no LBP)": padded_grid(scans, truth, model="logodds"),
-        "3x3 neighbour mean": neighbour_mean3(observed),
-        "LBP, converged": infer(observed, hidden, link, **CONVERGED).beliefs,
-        "LBP, thesis schedule, 2 iterations": infer(observed, hidden, link, **THESIS_TWO).beliefs,
-    }
+    out = baselines(scans, truth, observed)
+    out["LBP, converged"] = infer(observed, hidden, link, **CONVERGED).beliefs
+    out["LBP, thesis schedule, 2 iterations"] = infer(observed, hidden, link, **THESIS_TWO).beliefs
     if learned is not None:
         for pairing in ("receiver", "oriented"):
             out[f"LBP, learned on another room ({pairing} pairing)"] = infer(
                 observed, learned[0], learned[1], pairing=pairing, **CONVERGED).beliefs
-    if graph_cut_available():
-        from crfmap.bench.external import graph_cut_map
-
-        occupied, _ = graph_cut_map(observed.probability, hidden, link)
-        out["graph-cut MAP"] = observed.with_probability(occupied.astype(float))
     return out
 
 
@@ -215,6 +220,22 @@ def summarise(run: dict) -> dict:
             out[name][metric] = {"mean": float(ok.mean()) if ok.size else float("nan"),
                                  "sd": float(ok.std(ddof=1)) if ok.size > 1 else 0.0,
                                  "low": low, "high": high, "n": int(ok.size)}
+    return out
+
+
+# Short keys for the paper's placeholders ({{number:NAME.lbp.mse.mean}}).
+SLUGS = {"raw arctan grid (no LBP)": "raw", "log-odds grid (no LBP)": "logodds", "3x3 neighbour mean": "neighbour",
+         "graph-cut MAP (default tables)": "graphcut", "LBP, converged": "lbp", "LBP, thesis schedule, 2 iterations": "lbp2",
+         "LBP, learned on another room (receiver pairing)": "learned_receiver",
+         "LBP, learned on another room (oriented pairing)": "learned_oriented"}
+
+
+def flat_summary(run: dict, summary: dict) -> dict:
+    """The summary under short keys (:data:`SLUGS`), with the settings and the unseen fraction, for save_numbers."""
+    out = {SLUGS.get(name, name): by_metric for name, by_metric in summary.items()}
+    out["rooms"] = len(run["per_room"])
+    out["unseen_fraction_mean"] = float(np.mean(run["unseen_fraction"]))
+    out["settings"] = run["settings"]
     return out
 
 
