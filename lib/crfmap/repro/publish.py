@@ -62,7 +62,7 @@ def _pandoc(source: Path, to: str, extra: list) -> str:
 def to_typst(markdown_path: Path) -> str:
     """The Typst source of a rendered report (images referenced by path, relative to it)."""
     markdown_path = Path(markdown_path)
-    body = _pandoc(markdown_path, "typst", ["--wrap=none"])
+    body = _pandoc(markdown_path, "typst", ["--wrap=none", "--columns=10000"])  # tables: natural widths
     return TYPST_HEADER + "\n" + body
 
 
@@ -70,7 +70,7 @@ def to_html(markdown_path: Path, css_path: Path) -> str:
     """One standalone HTML page: figures and style embedded, nothing loaded from elsewhere."""
     markdown_path = Path(markdown_path)
     return _pandoc(markdown_path, "html5", [
-        "--standalone", "--embed-resources", f"--css={css_path}", "--wrap=none",
+        "--standalone", "--embed-resources", f"--css={css_path}", "--wrap=none", "--columns=10000",
         f"--resource-path={markdown_path.parent}", f"--metadata=pagetitle:{TITLE}"])
 
 
