@@ -13,9 +13,27 @@ from crfmap.grid import OccupancyGrid
 
 OCCUPANCY_CMAP = "magma_r"  # perceptually uniform, monotone in lightness: pale = free, black = occupied
 OCCUPANCY_TICKS = (0.0, 0.25, 0.5, 0.75, 1.0)
-# Above this many cells on a side a page-size figure shows fewer pixels than cells: nearest-neighbour
-# sampling would drop one-cell walls, so the image is averaged in colour space instead.
+# Above this many cells on a side a page-size figure shows fewer pixels than cells: sampling would drop
+# one-cell walls, so the grid is pooled for display (display_pool), walls kept.
 _DOWNSAMPLE_CELLS = 400
+
+
+def display_pool(p, k: int) -> np.ndarray:
+    """Shrink a grid k-fold for display only, so thin walls survive at page size.
+
+    Each k x k block shows its largest P if that is above 0.5 (a wall anywhere in the block stays
+    visible), else its mean.
+
+    >>> display_pool(np.array([[0.0, 1.0], [0.0, 0.0]]), 2).tolist()
+    [[1.0]]
+    """
+    p = np.asarray(p, dtype=float)
+    h, w = -(-p.shape[0] // k) * k, -(-p.shape[1] // k) * k
+    padded = np.full((h, w), np.nan)
+    padded[:p.shape[0], :p.shape[1]] = p
+    blocks = padded.reshape(h // k, k, w // k, k)
+    top = np.nanmax(blocks, axis=(1, 3))
+    return np.where(top > 0.5, top, np.nanmean(blocks, axis=(1, 3)))
 
 
 def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = True, **kwargs):
@@ -40,14 +58,16 @@ def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = T
         extent = None
         resolution = None
     if max(data.shape) > _DOWNSAMPLE_CELLS:
-        kwargs.setdefault("interpolation", "antialiased")
-        kwargs.setdefault("interpolation_stage", "rgba")
+        if extent is None:  # keep the axes in cells of the full grid
+            extent = (-0.5, data.shape[1] - 0.5, -0.5, data.shape[0] - 0.5)
+            cells = True
+        data = display_pool(data, -(-max(data.shape) // _DOWNSAMPLE_CELLS))
     kwargs.setdefault("interpolation", "nearest")
     im = ax.imshow(data, cmap=kwargs.pop("cmap", OCCUPANCY_CMAP), vmin=0.0, vmax=1.0, origin="lower",
                    extent=extent, **kwargs)
     if title:
         ax.set_title(title)
-    if extent is None:
+    if extent is None or cells:
         ax.set_xlabel("x [cells]")
         ax.set_ylabel("y [cells]")
     else:
