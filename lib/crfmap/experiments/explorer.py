@@ -176,8 +176,8 @@ def draw(ex: Exploration):
     axes = fig.subplots(1, 4, gridspec_kw={"width_ratios": [1, 1, 1, 1.05]})
     truth = ex.truth
     s = ex.settings
-    show_grid(axes[0], truth, f"truth: {s['scene']}")
-    show_grid(axes[1], ex.observation.observed,
+    show_grid(axes[0], truth, f"truth: {s['scene']}", colorbar=False)  # one colour bar, on the last grid
+    show_grid(axes[1], ex.observation.observed, colorbar=False, title=
               f"before LBP ({ex.observation.noise_kind} {ex.observation.noise:g})\nMSE {ex.before.mse:.4f}")
     show_grid(axes[2], ex.result.beliefs,
               f"after LBP: {ex.result.iterations} it., {'converged' if ex.result.converged else 'not converged'}"
@@ -204,8 +204,8 @@ def explore(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_
     """:func:`run` then :func:`draw`: the explorer's figure for one setting.
 
     >>> fig = explore("x", iterations=2, schedule="thesis")
-    >>> len(fig.axes)
-    4
+    >>> len(fig.axes)  # truth, before, after (with the colour bar), ROC
+    5
     """
     return draw(run(scene, noise, hidden, link, schedule, iterations, radius, seed))
 

@@ -59,8 +59,11 @@ def render(template: str, out_dir: Path, missing: list) -> str:
     return PLACEHOLDER.sub(replace, template)
 
 
-def build_paper(template: Path | None = None, output: Path | None = None) -> Path:
-    """Render the template into ``paper/generated/paper.md``; returns its path."""
+def build_paper(template: Path | None = None, output: Path | None = None, publish: bool = True) -> Path:
+    """Render the template into ``paper/generated/paper.md``; returns its path.
+
+    ``publish=True`` also builds ``paper.pdf`` and ``paper.html`` beside it (:mod:`crfmap.repro.publish`).
+    """
     template = Path(template or paths.PAPER / "paper.md")
     output = Path(output or paths.GENERATED / "paper.md")
     missing: list = []
@@ -69,4 +72,8 @@ def build_paper(template: Path | None = None, output: Path | None = None) -> Pat
         text += "\n\n---\nNot generated when this report was built: " + ", ".join(missing) + "\n"
     with atomic_path(output) as tmp:
         Path(tmp).write_text(text)
+    if publish:
+        from crfmap.repro.publish import publish as publish_paper
+
+        publish_paper(output)
     return output

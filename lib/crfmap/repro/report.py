@@ -30,12 +30,19 @@ def _clean(value):
     return value
 
 
-def save_figure(fig, name: str, dpi: int = 150) -> Path:
-    """Save a matplotlib figure as ``figures/<name>.png``; returns the path."""
+def save_figure(fig, name: str, dpi: int = 150, vector: bool = True) -> Path:
+    """Save a matplotlib figure as ``figures/<name>.png``; returns the path.
+
+    ``vector=True`` also writes ``figures/<name>.pdf`` (vector lines and text) for authors who
+    include the figures in LaTeX.
+    """
     paths.FIGURES.mkdir(parents=True, exist_ok=True)
     target = paths.FIGURES / f"{name}.png"
     with atomic_path(target) as tmp:
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
+    if vector:
+        with atomic_path(target.with_suffix(".pdf")) as tmp:
+            fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="pdf")
     return target
 
 

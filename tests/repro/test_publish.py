@@ -1,0 +1,141 @@
+"""The paper's prose quotes no typed numbers, and its PDF and HTML are built with every figure, offline."""
+import importlib
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+TEMPLATE = ROOT / "paper" / "paper.md"
+
+# Numbers the prose may type: the thesis's own, quoted as the thesis's (its tables, its worked example,
+# its node numbering and its learning constants) ...
+THESIS_NUMBERS = {"0.8", "0.74", "0.004608", "7", "0.26", "0.24", "0.77", "0.505", "4", "5", "8", "0.0825", "0.0219",
+                  "0.0197", "0.112", "0.0623", "0.055", "0.35", "0.024", "0.0007", "0.00005", "0.8436", "0.6229",
+                  "0.977", "0.01"}
+# ... and the definitions the method is made of: the default tables and their ratios, P = 0.5 unknown,
+# 0.25 / 0.75 for one hit under eq. 16, table entries a of [[a, 1], [1, a]] that the text names, the square
+# lattice's critical coupling 0.44 (a constant of physics) and the 95 % of a confidence interval.
+DEFINITIONS = {"0", "1", "2", "3", "9", "10", "0.9", "0.1", "0.5", "0.25", "0.75", "1.5", "0.44", "95"}
+# "Fig. 27-35", "Tables 10-14", "eq. 12 and 13", "sec. 3.4.2", "notebook 05": references, not quantities.
+REFERENCE = re.compile(r"\b(?:Figs?\.|Tables?|eqs?\.|sec\.|Listing|notebooks?)\s+\d+(?:\.\d+)*"
+                       r"(?:\s*(?:-|,|and)\s*\d+(?:\.\d+)*)*", re.IGNORECASE)
+PLACEHOLDER = re.compile(r"\{\{[^}]*\}\}")
+NUMBER = re.compile(r"(?<![\w.])\d+(?:\.\d+)?(?![\w])")
+
+
+def typed_numbers(text: str) -> list:
+    """(number, context) for every number in ``text`` that is neither a placeholder nor allowed."""
+    text = re.sub(r"<!--.*?-->", " ", text, flags=re.S)
+    text = re.sub(r"`[^`]*`", " ", text)  # code: names and commands
+    text = PLACEHOLDER.sub(" ", text)
+    text = REFERENCE.sub(" ", text)
+    found = []
+    for m in NUMBER.finditer(text):
+        value = m.group(0)
+        if value not in THESIS_NUMBERS | DEFINITIONS:
+            found.append((value, text[max(0, m.start() - 40):m.end() + 20].replace("\n", " ")))
+    return found
+
+
+def test_the_check_finds_typed_numbers():
+    assert [v for v, _ in typed_numbers("recall fell to 0.051 in Fig. 29")] == ["0.051"]
+    assert typed_numbers("MSE {{number:x.mse|.4f}} (thesis 0.0623), Tables 15-20, sec. 3.4.2") == []
+
+
+def test_prose_quotes_no_typed_numbers():
+    found = typed_numbers(TEMPLATE.read_text())
+    assert not found, "numbers typed into paper/paper.md (make them {{number:...}} placeholders):\n" + "\n".join(
+        f"  {value!r} in ...{context}..." for value, context in found)
+
+
+def test_paper_has_the_parts_a_reader_needs():
+    text = TEMPLATE.read_text()
+    for part in ("**Abstract.**", "## Summary of verdicts", "## Conclusion", "<!-- BEYOND: section from paper/beyond.md -->"):
+        assert part in text, part
+    figures = re.findall(r"\{\{figure:([^}|]+)\|([^}]*)\}\}", text)
+    assert figures and all(len(caption.split()) >= 4 for _, caption in figures), "every figure needs a real caption"
+    for section in text.split("\n## "):  # the thesis's figures in the thesis's order within each section
+        numbered = [int(m) for m in re.findall(r"\{\{figure:fig(\d\d)", section)]
+        assert numbered == sorted(numbered), f"thesis figures out of order in '{section.splitlines()[0]}': {numbered}"
+
+
+@pytest.fixture
+def out(tmp_path, monkeypatch):
+    monkeypatch.setenv("CRFMAP_OUTPUT_ROOT", str(tmp_path))
+    import crfmap.paths
+
+    importlib.reload(crfmap.paths)
+    import crfmap.repro.paper
+    import crfmap.repro.publish
+    import crfmap.repro.report
+
+    for module in (crfmap.repro.report, crfmap.repro.publish, crfmap.repro.paper):
+        importlib.reload(module)
+    yield tmp_path
+    monkeypatch.delenv("CRFMAP_OUTPUT_ROOT")
+    importlib.reload(crfmap.paths)
+    for module in (crfmap.repro.report, crfmap.repro.publish, crfmap.repro.paper):
+        importlib.reload(module)
+
+
+def pdf_image_count(pdf_path) -> int:
+    """Image XObjects drawn on the PDF's pages (each figure is one)."""
+    from pypdf import PdfReader
+
+    return sum(len(page.images) for page in PdfReader(str(pdf_path)).pages)
+
+
+def test_publish_builds_pdf_and_html_with_every_figure_and_nothing_remote(out):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from crfmap.plotting import show_grid
+    from crfmap.repro import paper, report
+
+    for k in range(3):
+        fig, ax = plt.subplots(figsize=(3, 3))
+        show_grid(ax, np.linspace(0, 1, 16).reshape(4, 4) ** (k + 1), f"grid {k}", cells=True)
+        report.save_figure(fig, f"fig_demo{k}")
+        plt.close(fig)
+        assert (out / "figures" / f"fig_demo{k}.pdf").read_bytes().startswith(b"%PDF")  # the vector copy
+    report.save_numbers("demo", {"mse": 0.01234})
+    report.save_table("table_demo", ["a", "b"], [[1, 0.5]])
+    template = out / "t.md"
+    template.write_text("# A title\n\nMSE {{number:demo.mse|.3f}}.\n\n{{table:table_demo}}\n\n"
+                        + "\n\n".join(f"{{{{figure:fig_demo{k}|Fig. {k}: a demo grid number {k}}}}}" for k in range(3))
+                        + "\n\n---\n")
+    md = paper.build_paper(template, out / "paper" / "generated" / "paper.md")
+    pdf, html, typ = md.with_suffix(".pdf"), md.with_suffix(".html"), md.with_suffix(".typ")
+    assert pdf.read_bytes().startswith(b"%PDF") and pdf_image_count(pdf) == 3
+    page = html.read_text()
+    assert page.count("data:image/png;base64,") == 3 and "Fig. 2: a demo grid number 2" in page
+    assert "<figcaption" in page  # a real caption, not only alt text
+    remote = re.findall(r"(?:src|href)=\"(https?://[^\"]+)\"", page)
+    assert not remote, remote  # standalone: nothing is loaded from elsewhere
+    source = typ.read_text()
+    assert "@preview" not in source and "#import" not in source  # Typst would download packages
+    assert "0.012" in source
+
+
+def test_publish_names_a_missing_report(out):
+    from crfmap.errors import InputError
+    from crfmap.repro.publish import publish
+
+    with pytest.raises(InputError, match="no rendered report"):
+        publish(out / "nothing.md")
+
+
+def test_the_generated_pdf_contains_every_figure():
+    """After `make reproduce`: as many images in paper.pdf as figures the report placed."""
+    from crfmap import paths
+
+    md = paths.GENERATED / "paper.md"
+    pdf = md.with_suffix(".pdf")
+    if not (md.exists() and pdf.exists()):
+        pytest.skip("no generated paper here (run make reproduce)")
+    placed = re.findall(r"\]\(([^()\s]+\.png)\)", md.read_text())  # captions may hold brackets themselves
+    assert placed and pdf_image_count(pdf) == len(placed)
