@@ -10,9 +10,9 @@ from crfmap.sim.simulator import simulate
 
 def test_odometry_scans_equal_the_true_poses_without_noise_and_drift_with_it():
     scene = rooms.room("enclosed", 0)
-    exact = simulate(scene, mode="waypoints", seed=0, progress=False)
+    exact = simulate(scene, drive="waypoints", seed=0, progress=False)
     np.testing.assert_allclose(rooms.odometry_scans(exact).laser_poses, exact.scans.laser_poses, atol=1e-9)
-    noisy = simulate(scene, mode="waypoints", seed=0, odometry_noise=(0.01, 0.01), progress=False)
+    noisy = simulate(scene, drive="waypoints", seed=0, odometry_noise=(0.01, 0.01), progress=False)
     drift = np.abs(rooms.odometry_scans(noisy).laser_poses[:, :2] - noisy.scans.laser_poses[:, :2]).max()
     assert 0.0 < drift < 2.0
 

@@ -41,7 +41,7 @@ KINDS = ("occluded", "enclosed", "hollow")
 # The thesis's noise model (sec. 3.1): ranges d +- C, C ~ U[0, bound]; odometry steps +- C as well.
 RANGE_NOISE = 0.05  # [m], half a 0.1 m cell
 ODOMETRY_NOISE = (0.002, 0.002)  # [m, rad] per 0.1 s motion step
-CONVERGED = {"threads": 1, "max_iter": 1000, "tol": 1e-5}
+TO_CONVERGENCE = {"threads": 1, "max_iter": 1000, "tol": 1e-5}
 THESIS_TWO = {"schedule": "thesis", "max_iter": 2}
 PAD_CELLS = 20  # odometry drift can take the robot's estimate outside the room
 
@@ -71,11 +71,11 @@ def odometry_scans(recording):
 
 def padded_grid(scans, truth: OccupancyGrid, model="arctan", pad=PAD_CELLS) -> OccupancyGrid:
     """The grid of ``scans`` over the truth's cells; built ``pad`` cells wider, so drifted poses still fit."""
-    from crfmap.experiments.pipeline import truth_extent
+    from crfmap.experiments.pipeline import truth_bounds
 
-    x0, y0, x1, y1 = truth_extent(truth)
+    x0, y0, x1, y1 = truth_bounds(truth)
     margin = pad * truth.resolution
-    wide = build_grid(scans, truth.resolution, model=model, extent=(x0 - margin, y0 - margin, x1 + margin, y1 + margin))
+    wide = build_grid(scans, truth.resolution, model=model, bounds=(x0 - margin, y0 - margin, x1 + margin, y1 + margin))
     h, w = truth.shape
     return truth.with_probability(wide.probability[pad:pad + h, pad:pad + w])
 
@@ -121,12 +121,12 @@ def methods(scans, truth, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, le
     thesis's pairing (rows = receiving cell) and once with the proper pairwise ("oriented") one.
     """
     out = baselines(scans, truth, observed)
-    out["LBP, converged"] = infer(observed, hidden, link, **CONVERGED).beliefs
+    out["LBP, converged"] = infer(observed, hidden, link, **TO_CONVERGENCE).beliefs
     out["LBP, thesis schedule, 2 iterations"] = infer(observed, hidden, link, **THESIS_TWO).beliefs
     if learned is not None:
         for pairing in ("receiver", "oriented"):
             out[f"LBP, learned on another room ({pairing} pairing)"] = infer(
-                observed, learned[0], learned[1], pairing=pairing, **CONVERGED).beliefs
+                observed, learned[0], learned[1], pairing=pairing, **TO_CONVERGENCE).beliefs
     return out
 
 
@@ -149,28 +149,28 @@ def score_methods(predictions: dict, truth: OccupancyGrid, observed: OccupancyGr
     return out
 
 
-def scan_room(kind: str, seed: int, mode=None, laser=None, range_noise=RANGE_NOISE,
+def scan_room(kind: str, seed: int, drive=None, laser=None, range_noise=RANGE_NOISE,
               odometry_noise=ODOMETRY_NOISE) -> tuple:
     """(scene, scans with odometry poses, arctan grid over the truth's cells) of one generated room."""
     from crfmap.sim.simulator import simulate
 
     scene = room(kind, seed)
-    rec = simulate(scene, laser, mode, seed=seed, range_noise=range_noise, odometry_noise=odometry_noise,
+    rec = simulate(scene, laser, drive, seed=seed, range_noise=range_noise, odometry_noise=odometry_noise,
                    progress=False)
     scans = odometry_scans(rec)
     return scene, scans, padded_grid(scans, scene.truth)
 
 
-def learn_on_room(kind: str, seed: int, steps=20, mode=None, laser=None, range_noise=RANGE_NOISE,
+def learn_on_room(kind: str, seed: int, steps=20, drive=None, laser=None, range_noise=RANGE_NOISE,
                   odometry_noise=ODOMETRY_NOISE):
     """The gradient learner (converged LBP, from the default tables) on one noisy training room."""
     from crfmap.assess.learning import learn_gradient
 
-    scene, _, observed = scan_room(kind, seed, mode, laser, range_noise, odometry_noise)
-    return learn_gradient(observed, scene.truth, steps=steps, lbp_options=CONVERGED, progress=False)
+    scene, _, observed = scan_room(kind, seed, drive, laser, range_noise, odometry_noise)
+    return learn_gradient(observed, scene.truth, steps=steps, lbp_options=TO_CONVERGENCE, progress=False)
 
 
-def run_rooms(kind: str, seeds, mode=None, laser=None, range_noise=RANGE_NOISE, odometry_noise=ODOMETRY_NOISE,
+def run_rooms(kind: str, seeds, drive=None, laser=None, range_noise=RANGE_NOISE, odometry_noise=ODOMETRY_NOISE,
               hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, learned=None) -> dict:
     """Scan every generated room of ``kind`` (one per seed), build its grid from odometry, score all methods.
 
@@ -182,12 +182,12 @@ def run_rooms(kind: str, seeds, mode=None, laser=None, range_noise=RANGE_NOISE, 
         raise InputError("seeds", "need at least one room")
     per_room, unseen = [], []
     for s in seeds:
-        scene, scans, observed = scan_room(kind, s, mode, laser, range_noise, odometry_noise)
+        scene, scans, observed = scan_room(kind, s, drive, laser, range_noise, odometry_noise)
         predictions = methods(scans, scene.truth, observed, hidden, link, learned)
         per_room.append(score_methods(predictions, scene.truth, observed))
         unseen.append(float(np.mean(observed.probability == UNKNOWN)))
     return {"per_room": per_room, "methods": list(per_room[0]), "unseen_fraction": unseen,
-            "settings": {"kind": kind, "seeds": seeds, "mode": mode, "range_noise_m": range_noise,
+            "settings": {"kind": kind, "seeds": seeds, "drive": drive if drive is None or isinstance(drive, str) else repr(drive), "range_noise_m": range_noise,
                          "odometry_noise": list(np.atleast_1d(odometry_noise)),
                          "graph_cut": graph_cut_available()}}
 
