@@ -39,7 +39,7 @@ def test_infer_thesis_two_iterations(tmp_path, capsys):
     grid, _ = noisy_grid(1)
     save_grid(grid, tmp_path / "in.npy")
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), "--schedule", "thesis",
-                 "--max-iter", "2"]) == 0
+                 "--max-iter", "2", "--preset", "thesis"]) == 0
     assert "2 iterations" in capsys.readouterr().out
     expected = infer(grid, schedule="thesis", max_iter=2).beliefs.probability
     np.testing.assert_allclose(load_grid(tmp_path / "out.npy").probability, expected)
@@ -53,6 +53,16 @@ def test_infer_margin_keeps_far_unknown_cells(tmp_path):
     out = load_grid(tmp_path / "out.npy").probability
     assert np.all(out[:, 12:] == 0.5)  # more than 3 cells from any observation: untouched
     assert out[10, 7] > 0.5  # within the margin: filled from the neighbours
+
+
+def test_infer_default_is_the_certainty_preset(tmp_path):
+    from crfmap.crf.presets import get_preset
+
+    grid, _ = noisy_grid(3)
+    save_grid(grid, tmp_path / "in.npy")
+    assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy")]) == 0
+    expected = get_preset("certainty").refine(grid, max_iter=1000).beliefs.probability
+    np.testing.assert_allclose(load_grid(tmp_path / "out.npy").probability, expected)
 
 
 def test_metrics_json(tmp_path, capsys):

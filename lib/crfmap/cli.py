@@ -12,7 +12,7 @@ import sys
 from crfmap.errors import CrfmapError
 
 # Sub-command name -> module in crfmap.commands providing add_parser(subparsers) and run(args).
-COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench")
+COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench", "evaluate")
 
 
 class _Parser(argparse.ArgumentParser):

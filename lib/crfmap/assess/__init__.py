@@ -4,6 +4,9 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 
 - :mod:`crfmap.assess.metrics`: ``evaluate``, ``Report``, ``mse``, ``confusion``, ``roc_curve``, ``auc``
 - :mod:`crfmap.assess.crossval`: ``cross_validate``, ``CrossValidation``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean``
+- :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score``, ``compare`` (validation on scans the map never saw)
+- :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
+- :mod:`crfmap.assess.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``fit_pseudolikelihood``
 - :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
@@ -29,6 +32,18 @@ _API = {
     "LearningResult": "learning",
     "lbp_mse": "learning",
     "rescale": "learning",
+    "scan_split": "scansplit",
+    "ScanSplit": "scansplit",
+    "score": "scansplit",
+    "compare": "scansplit",
+    "all_baselines": "baselines",
+    "window_mean": "baselines",
+    "window_median": "baselines",
+    "grey_closing": "baselines",
+    "graph_cut": "baselines",
+    "symmetric_tables": "modelspace",
+    "fit_scaled": "modelspace",
+    "fit_pseudolikelihood": "modelspace",
 }
 __all__ = sorted(_API)
 

@@ -1,0 +1,115 @@
+"""What a CRF refinement must beat: simple ways to clean a grid, all as [y, x] P(occupied) arrays.
+
+- :func:`window_mean` / :func:`window_median`: the mean / median P of the observed cells in the
+  3x3 window around each cell (0.5 where none is observed);
+- :func:`grey_closing`: morphological closing of P (3x3 maximum, then 3x3 minimum), which
+  closes gaps in walls one or two cells wide;
+- :func:`graph_cut`: the exact MAP labelling (P = 0 or 1) of a CRF by a PyMaxflow graph cut;
+- :func:`all_baselines`: these plus the raw grid, the log-odds grid and the thesis's tables,
+  for a :class:`crfmap.assess.scansplit.ScanSplit`.
+
+>>> p = np.array([[0.9, 0.5, 0.9], [0.1, 0.1, 0.1]])
+>>> window_mean(p).round(3).tolist()
+[[0.367, 0.42, 0.367], [0.367, 0.42, 0.367]]
+>>> grey_closing(np.array([[0.9, 0.1, 0.9]])).tolist()
+[[0.9, 0.9, 0.9]]
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from crfmap.errors import InputError
+from crfmap.grid import UNKNOWN
+
+
+def _windows(p, fill):
+    """The 9 shifted copies of ``p`` (3x3 window, edges padded with ``fill``): shape (9, H, W)."""
+    h, w = p.shape
+    padded = np.full((h + 2, w + 2), fill, dtype=np.float64)
+    padded[1:-1, 1:-1] = p
+    return np.stack([padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)])
+
+
+def _check(p):
+    p = np.asarray(getattr(p, "probability", p), dtype=np.float64)
+    if p.ndim != 2 or p.size == 0:
+        raise InputError("grid", f"expected a non-empty 2-D grid of P(occupied), got shape {p.shape}")
+    return p
+
+
+def window_mean(grid) -> np.ndarray:
+    """Mean P of the observed (P != 0.5) cells in each cell's 3x3 window; 0.5 where there are none."""
+    p = _check(grid)
+    win = _windows(np.where(p == UNKNOWN, np.nan, p), np.nan)
+    known = np.isfinite(win)
+    n = known.sum(axis=0)
+    total = np.where(known, win, 0.0).sum(axis=0)
+    return np.where(n > 0, total / np.maximum(n, 1), UNKNOWN)
+
+
+def window_median(grid) -> np.ndarray:
+    """Median P of the observed cells in each cell's 3x3 window; 0.5 where there are none.
+
+    >>> window_median(np.array([[0.9, 0.1, 0.2]])).round(3).tolist()
+    [[0.5, 0.2, 0.15]]
+    """
+    p = _check(grid)
+    win = _windows(np.where(p == UNKNOWN, np.nan, p), np.nan)
+    known = np.isfinite(win).any(axis=0)
+    with warnings.catch_warnings():  # an all-unknown window: NaN, replaced below
+        warnings.simplefilter("ignore", RuntimeWarning)
+        med = np.nanmedian(win, axis=0)
+    return np.where(known, med, UNKNOWN)
+
+
+def grey_closing(grid) -> np.ndarray:
+    """3x3 grey-level closing of P: dilation (maximum) then erosion (minimum); edges replicate."""
+    p = _check(grid)
+    dilated = _windows(p, -np.inf).max(axis=0)
+    return _windows(dilated, np.inf).min(axis=0)
+
+
+def graph_cut(observation, hidden, region=None) -> np.ndarray:
+    """MAP labelling (1.0 occupied, 0.0 free) of the CRF with unary ``observation`` and ``hidden``.
+
+    Exact by a PyMaxflow graph cut (symmetric attractive ``hidden`` only). Outside ``region``
+    (boolean mask) the result is the observation itself.
+
+    >>> graph_cut(np.array([[0.9, 0.45, 0.9]]), [[10, 1], [1, 10]]).tolist()
+    [[1.0, 1.0, 1.0]]
+    """
+    from crfmap.bench.external import graph_cut_map
+
+    u = _check(observation)
+    labels, _ = graph_cut_map(u, hidden, np.eye(2))
+    out = np.asarray(labels, dtype=np.float64)
+    if region is not None:
+        out = np.where(region, out, u)
+    return out
+
+
+def all_baselines(split, thesis_max_iter: int = 1000) -> dict:
+    """{name: P} of every baseline for a scan split's first half (needs ``split.first_scans`` for log-odds).
+
+    ``raw`` (arctan grid), ``logodds`` (the Probabilistic Robotics update), ``mean3x3``,
+    ``median3x3``, ``closing3x3``, ``thesis`` (LBP with the thesis's tables on the raw grid) and
+    ``graphcut`` (the MAP labelling of the thesis's CRF).
+    """
+    from crfmap.crf.presets import get_preset
+
+    raw = split.raw_probability()
+    out = {"raw": raw}
+    if split.first_scans is not None:
+        from crfmap.mapping.builder import build_grid
+
+        out["logodds"] = build_grid(split.first_scans, split.resolution, bounds=split.bounds,
+                                    model="logodds").probability
+    out["mean3x3"] = window_mean(raw)
+    out["median3x3"] = window_median(raw)
+    out["closing3x3"] = grey_closing(raw)
+    thesis = get_preset("thesis")
+    out["thesis"] = thesis.refine(raw, max_iter=thesis_max_iter).beliefs.probability
+    out["graphcut"] = graph_cut(raw, thesis.hidden)
+    return out

@@ -1,0 +1,88 @@
+"""The model space the thesis left as future work, scored by scan-split validation.
+
+- :func:`symmetric_tables`: every (coupling J, link strength K) pair of a phase diagram, the
+  hidden table [[e^2J, 1], [1, e^2J]] and link [[e^2K, 1], [1, e^2K]] applied to the raw grid,
+  LBP near observations (as the certainty preset), scored on the second half.
+- :func:`fit_scaled`: the certainty preset's coupling and evidence scale chosen by the scan-split
+  Brier score of one recording (to apply to the others: transfer).
+- :func:`fit_pseudolikelihood`: hidden and link tables learned by pseudo-likelihood with the
+  second half's labels as the truth.
+
+>>> from crfmap.assess.scansplit import ScanSplit
+>>> rng = np.random.default_rng(0)
+>>> sp = ScanSplit(*(rng.integers(0, 3, (16, 16)) for _ in range(4)))
+>>> d = symmetric_tables(sp, [0.0, 0.3], [0.5, 1.0], margin=2)
+>>> d["brier"].shape, bool(np.all(np.isfinite(d["brier"])))
+((2, 2), True)
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from crfmap.assess.scansplit import score
+from crfmap.crf.presets import coupling_table, get_preset
+
+
+def _near(split, margin):
+    return get_preset("certainty").region(split.first_hits + split.first_passes > 0) if margin is None else \
+        replace(get_preset("certainty"), margin=margin).region(split.first_hits + split.first_passes > 0)
+
+
+def table_refine(split, coupling, link_strength, margin=None, max_iter=1000):
+    """(beliefs, LBPResult) of the raw grid with symmetric tables of coupling J and link strength K."""
+    from crfmap.crf.lbp import infer
+
+    raw = split.raw_probability()
+    region = _near(split, margin)
+    result = infer(raw, coupling_table(coupling), coupling_table(link_strength), region=region, max_iter=max_iter)
+    return np.where(region, result.beliefs.probability, raw), result
+
+
+def symmetric_tables(split, couplings, link_strengths, margin=None, group="all", progress=False) -> dict:
+    """Phase diagram: Brier score, wall recall and convergence for every (J, K), arrays [J, K]."""
+    from tqdm.auto import tqdm
+
+    shape = (len(couplings), len(link_strengths))
+    out = {k: np.full(shape, np.nan) for k in ("brier", "wall_recall", "converged")}
+    pairs = [(i, j) for i in range(shape[0]) for j in range(shape[1])]
+    for i, j in tqdm(pairs, desc="phase diagram", disable=not progress, leave=False):
+        beliefs, result = table_refine(split, couplings[i], link_strengths[j], margin)
+        s = score(split, {"p": beliefs}, n_boot=0)["p"][group]
+        out["brier"][i, j], out["wall_recall"][i, j] = s["brier"], s["wall_recall"]
+        out["converged"][i, j] = result.converged
+    out["couplings"], out["link_strengths"] = np.asarray(couplings, float), np.asarray(link_strengths, float)
+    best = np.unravel_index(np.nanargmin(out["brier"]), shape)
+    out["best"] = (float(couplings[best[0]]), float(link_strengths[best[1]]))
+    return out
+
+
+def scaled_preset(coupling, scale, base="certainty"):
+    """The certainty preset with coupling J and every evidence weight multiplied by ``scale``."""
+    p = get_preset(base)
+    return replace(p, hidden=coupling_table(coupling), occupied=tuple(scale * v for v in p.occupied),
+                   free=tuple(scale * v for v in p.free))
+
+
+def fit_scaled(split, couplings, scales) -> tuple:
+    """(J, scale) of :func:`scaled_preset` with the lowest scan-split Brier score on ``split``."""
+    best, arg = np.inf, None
+    for j in couplings:
+        for s in scales:
+            b = scaled_preset(j, s).refine(hits=split.first_hits, passes=split.first_passes).beliefs.probability
+            value = score(split, {"p": b}, n_boot=0)["p"]["all"]["brier"]
+            if value < best:
+                best, arg = value, (float(j), float(s))
+    return arg
+
+
+def fit_pseudolikelihood(split, steps=300):
+    """(hidden, link) learned by pseudo-likelihood: raw grid of the first half, second-half labels as truth."""
+    from crfmap.assess.learning import learn_pseudolikelihood
+
+    mask = split.group("all")
+    truth = split.labels().astype(float)
+    r = learn_pseudolikelihood(split.raw_probability(), truth, mask=mask, steps=steps, progress=False,
+                               lbp_options={"max_iter": 1})
+    return r.hidden, r.link

@@ -1,0 +1,301 @@
+"""Scan-split validation: does a refined map predict what the robot observes next? (no hand labels)
+
+A real recording has no ground truth, but it has many scans of the same place. Split its
+scans in two interleaved halves (even and odd scans by default): the grid is built from the
+*first* half only, refined, and each cell's P(occupied) is scored against what the *second*
+half observes there. Each second-half beam that returns marks its end cell occupied once; every
+cell it passes is marked free once. A cell the second half observed is labelled occupied when
+its beams ended there at least as often as they passed it (``hits2 >= passes2``), else free;
+every such cell counts once.
+
+Scores (:func:`score`) are reported for three groups of second-half cells:
+
+- ``"all"``: every cell the second half observed;
+- ``"seen"``: those the first half also observed (the map had evidence there);
+- ``"unseen"``: those the first half never observed (the raw grid says 0.5 there; only
+  filling-in can help).
+
+Metrics: the Brier score (mean squared error of P against the 0/1 label), log-loss (P clipped
+to [1e-6, 1 - 1e-6]), AUC (ties count one half) and the recall of observed walls (the share of
+occupied-labelled cells with P > 0.5). Confidence intervals come from a *spatial-block
+bootstrap*: the grid is cut into ``block`` x ``block`` cell squares, and squares (not cells,
+which are correlated with their neighbours) are resampled with replacement. Predictions scored
+together share the resamples, so :func:`score` also gives intervals of the paired difference to
+a reference prediction.
+
+>>> split = ScanSplit(first_hits=np.array([[0, 3, 0]]), first_passes=np.array([[2, 0, 0]]),
+...                   second_hits=np.array([[0, 2, 1]]), second_passes=np.array([[3, 0, 0]]))
+>>> split.labels().astype(int).tolist(), split.group("unseen").astype(int).tolist()
+([[0, 1, 1]], [[0, 0, 1]])
+>>> s = score(split, {"raw": split.raw_probability()}, n_boot=0)
+>>> round(s["raw"]["all"]["brier"], 4), s["raw"]["unseen"]["brier"]
+(0.0941, 0.25)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
+
+GROUPS = ("all", "seen", "unseen")
+METRICS = ("brier", "logloss", "auc", "wall_recall")
+LOG_FLOOR = 1e-6  # P is clipped to [LOG_FLOOR, 1 - LOG_FLOOR] for the log-loss
+DEFAULT_BLOCK = 16  # [cells] side of a bootstrap square (0.8 m at 5 cm cells)
+
+
+def split_scans(scans, parity: int):
+    """The scans with index % 2 == parity, as a new ScanSet (same sensor, same frame).
+
+    >>> from crfmap.recording import ScanSet
+    >>> s = ScanSet(np.ones((5, 2), np.float32), 0.0, 0.1, 0.1, 5.0, np.zeros((5, 3)), np.arange(5.0))
+    >>> split_scans(s, 1).stamps.tolist()
+    [1.0, 3.0]
+    """
+    from dataclasses import replace
+
+    if parity not in (0, 1):
+        raise InputError("parity", f"must be 0 (even scans) or 1 (odd scans), got {parity!r}")
+    keep = slice(parity, None, 2)
+    return replace(scans, ranges=np.asarray(scans.ranges)[keep], laser_poses=np.asarray(scans.laser_poses)[keep],
+                   stamps=np.asarray(scans.stamps)[keep])
+
+
+@dataclass
+class ScanSplit:
+    """Hit counts ([y, x] int arrays on one grid) of the two halves of a recording's scans.
+
+    ``first_*`` build the map; ``second_*`` only score it. ``first_scans`` (optional) keeps the
+    first half's ScanSet, for baselines that need the scans themselves (the log-odds grid).
+    """
+
+    first_hits: np.ndarray
+    first_passes: np.ndarray
+    second_hits: np.ndarray
+    second_passes: np.ndarray
+    resolution: float = 1.0
+    origin: tuple = (0.0, 0.0, 0.0)
+    bounds: tuple | None = None  # (xmin, ymin, xmax, ymax) [m] given to the builder
+    source: str = ""
+    first_scans: object = field(default=None, repr=False)
+
+    def __post_init__(self):
+        arrays = [np.asarray(a) for a in (self.first_hits, self.first_passes, self.second_hits, self.second_passes)]
+        shape = arrays[0].shape
+        if len(shape) != 2 or arrays[0].size == 0 or any(a.shape != shape for a in arrays):
+            raise InputError(self.source or "scan split", f"hit counts must be four non-empty 2-D arrays of one "
+                             f"shape, got {[a.shape for a in arrays]}")
+        if any(not np.issubdtype(a.dtype, np.integer) or (a < 0).any() for a in arrays):
+            raise InputError(self.source or "scan split", "hit counts must be non-negative integers")
+        self.first_hits, self.first_passes, self.second_hits, self.second_passes = arrays
+
+    @property
+    def shape(self):
+        return self.first_hits.shape
+
+    def labels(self) -> np.ndarray:
+        """Boolean [y, x]: the second half calls the cell occupied (hits >= passes, hits > 0)."""
+        return (self.second_hits >= self.second_passes) & (self.second_hits > 0)
+
+    def group(self, name: str) -> np.ndarray:
+        """Boolean [y, x] mask of the cells scored in group ``name`` (see :data:`GROUPS`)."""
+        observed2 = (self.second_hits + self.second_passes) > 0
+        seen1 = (self.first_hits + self.first_passes) > 0
+        if name == "all":
+            return observed2
+        if name == "seen":
+            return observed2 & seen1
+        if name == "unseen":
+            return observed2 & ~seen1
+        raise InputError("group", f"must be one of {', '.join(GROUPS)}, got {name!r}")
+
+    def raw_probability(self) -> np.ndarray:
+        """The first half's grid with the thesis's arctan model (as :func:`crfmap.mapping.build_grid`)."""
+        x = self.first_hits.astype(np.float64) - self.first_passes
+        return 0.5 + np.arctan(x) / math.pi
+
+    def raw_grid(self) -> OccupancyGrid:
+        """:meth:`raw_probability` as an OccupancyGrid with the split's resolution and origin."""
+        return OccupancyGrid(self.raw_probability(), resolution=self.resolution, origin=self.origin)
+
+
+def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress: bool = False) -> ScanSplit:
+    """Count the hits of the ``parity`` half (even scans: 0) and of the other half on one grid.
+
+    The grid covers every scan of the recording (:func:`crfmap.mapping.builder.scan_bounds`,
+    snapped to multiples of ``resolution`` like :func:`crfmap.mapping.build_grid`), unless
+    ``bounds`` (xmin, ymin, xmax, ymax) [m] is given.
+
+    >>> from crfmap.recording import ScanSet
+    >>> r = np.array([[0.36], [0.26]], np.float32)
+    >>> s = ScanSet(r, 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]] * 2), np.zeros(2))
+    >>> sp = scan_split(s, 0.1, bounds=(0, 0, 0.5, 0.1))
+    >>> sp.first_hits.tolist(), sp.second_hits.tolist()
+    ([[0, 0, 0, 0, 1]], [[0, 0, 0, 1, 0]])
+    """
+    from crfmap.mapping.builder import count_hits, scan_bounds
+
+    if len(scans) < 2:
+        raise InputError(getattr(scans, "source", "") or "scans", f"need at least 2 scans to split, got {len(scans)}")
+    if bounds is None:
+        xmin, ymin, xmax, ymax = scan_bounds(scans)
+        xmin = round(math.floor(xmin / resolution) * resolution, 9)
+        ymin = round(math.floor(ymin / resolution) * resolution, 9)
+        bounds = (xmin, ymin, xmax, ymax)
+    first = split_scans(scans, parity)
+    second = split_scans(scans, 1 - parity)
+    h1, e1 = count_hits(first, resolution, bounds=bounds, progress=progress)
+    h2, e2 = count_hits(second, resolution, bounds=bounds, progress=progress)
+    return ScanSplit(h1, e1, h2, e2, resolution=float(resolution), origin=(float(bounds[0]), float(bounds[1]), 0.0),
+                     bounds=tuple(float(b) for b in bounds), source=getattr(scans, "source", ""), first_scans=first)
+
+
+# --- scoring ------------------------------------------------------------------------------
+
+
+class _Scorer:
+    """The metrics of one prediction on one group of cells, fast under block resampling.
+
+    Brier, log-loss and recall are sums, kept per bootstrap block; the AUC sorts once and
+    reweights the sorted cells per resample.
+    """
+
+    def __init__(self, p, y, inverse, n_blocks):
+        q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
+        per_cell = np.stack([np.ones_like(p), (p - y) ** 2, -(y * np.log(q) + (1 - y) * np.log(1 - q)),
+                             y, y * (p > 0.5)])
+        self.sums = np.stack([np.bincount(inverse, weights=row, minlength=n_blocks) for row in per_cell])
+        order = np.argsort(p, kind="stable")
+        self.y, self.inverse = y[order], inverse[order]
+        self.starts = np.concatenate([[0], np.flatnonzero(np.diff(p[order])) + 1])  # runs of equal P
+
+    def metrics(self, block_weights=None) -> dict:
+        s = self.sums.sum(axis=1) if block_weights is None else self.sums @ block_weights
+        w = np.ones(len(self.y)) if block_weights is None else block_weights[self.inverse]
+        n, walls = s[0], s[3]
+        if n <= 0:
+            return dict.fromkeys(METRICS, float("nan"))
+        return {"brier": float(s[1] / n), "logloss": float(s[2] / n), "auc": self._auc(w),
+                "wall_recall": float(s[4] / walls) if walls > 0 else float("nan")}
+
+    def _auc(self, w):
+        """Mann-Whitney AUC: a wall beats every free cell with lower P, ties count one half."""
+        pos, neg = w * self.y, w * (1 - self.y)
+        n_pos, n_neg = pos.sum(), neg.sum()
+        if n_pos <= 0 or n_neg <= 0:
+            return float("nan")
+        pos_g, neg_g = np.add.reduceat(pos, self.starts), np.add.reduceat(neg, self.starts)
+        neg_below = np.cumsum(neg_g) - neg_g
+        return float(np.sum(pos_g * (neg_below + 0.5 * neg_g)) / (n_pos * n_neg))
+
+
+def _block_ids(shape, block):
+    yy, xx = np.indices(shape)
+    nbx = -(-shape[1] // block)
+    return (yy // block) * nbx + xx // block
+
+
+def _values(pred, shape, name):
+    p = pred.probability if isinstance(pred, OccupancyGrid) else np.asarray(pred, dtype=np.float64)
+    p = getattr(p, "probability", p)
+    if p.shape != shape:
+        raise InputError(name, f"prediction shape {p.shape} does not match the split's grid {shape}")
+    if not np.all(np.isfinite(p)) or p.min() < 0 or p.max() > 1:
+        raise InputError(name, "predictions must be probabilities in [0, 1]")
+    return p
+
+
+def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = DEFAULT_BLOCK, seed: int = 0,
+          reference: str | None = None, level: float = 0.95) -> dict:
+    """Score predictions ``{name: [y, x] P(occupied)}`` against the second half, with intervals.
+
+    Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), ...}}}``; with a
+    ``reference`` name, also ``metric + "_diff"`` (name minus reference) and its interval
+    ``metric + "_diff_ci"`` from the same (paired) resamples. ``n_boot=0`` skips the intervals.
+    """
+    if not predictions:
+        raise InputError("predictions", "nothing to score")
+    if reference is not None and reference not in predictions:
+        raise InputError("reference", f"{reference!r} is not one of the predictions")
+    if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 0):
+        raise InputError("n_boot", f"must be a non-negative integer, got {n_boot!r}")
+    if not (isinstance(block, (int, np.integer)) and block >= 1):
+        raise InputError("block", f"must be a positive integer, got {block!r}")
+    probs = {name: _values(p, split.shape, name) for name, p in predictions.items()}
+    labels = split.labels().astype(np.float64)
+    blocks = _block_ids(split.shape, block)
+    rng = np.random.default_rng(seed)
+    alpha = (1 - level) / 2
+    out = {name: {} for name in probs}
+    for group in GROUPS:
+        mask = split.group(group)
+        y = labels[mask]
+        ids = blocks[mask]
+        uniq, inverse = np.unique(ids, return_inverse=True)
+        # resample blocks: a block's weight is how often it was drawn
+        draws = [np.bincount(rng.integers(0, len(uniq), len(uniq)), minlength=len(uniq)).astype(np.float64)
+                 for _ in range(n_boot)] if len(uniq) else []
+        boot = {}
+        for name, p in probs.items():
+            scorer = _Scorer(p[mask], y, inverse, len(uniq))
+            out[name][group] = dict(scorer.metrics(), cells=int(mask.sum()), walls=int(y.sum()))
+            boot[name] = {}
+            if draws:
+                rows = [scorer.metrics(w) for w in draws]
+                boot[name] = {m: np.array([r[m] for r in rows]) for m in METRICS}
+        for name in probs:
+            entry = out[name][group]
+            for m in METRICS:
+                if draws:
+                    entry[m + "_ci"] = _interval(boot[name][m], alpha)
+                if reference is not None:
+                    entry[m + "_diff"] = entry[m] - out[reference][group][m]
+                    if draws:
+                        entry[m + "_diff_ci"] = _interval(boot[name][m] - boot[reference][m], alpha)
+    return out
+
+
+def _interval(values, alpha):
+    v = values[np.isfinite(values)]
+    if v.size == 0:
+        return (float("nan"), float("nan"))
+    return (float(np.quantile(v, alpha)), float(np.quantile(v, 1 - alpha)))
+
+
+def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, block: int = DEFAULT_BLOCK,
+            seed: int = 0, extra: dict | None = None) -> dict:
+    """Score every baseline (:func:`crfmap.assess.baselines.all_baselines`) and ``preset`` on a split.
+
+    Returns the :func:`score` dictionary with ``"raw"`` as the paired reference; the preset's
+    LBP result summary is under ``"_lbp"``. ``extra`` adds more ``{name: P}`` rows.
+    """
+    from crfmap.assess.baselines import all_baselines
+    from crfmap.crf.presets import get_preset
+
+    predictions = all_baselines(split)
+    result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes, max_iter=5000)
+    predictions[preset] = result.beliefs.probability
+    predictions.update(extra or {})
+    out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
+    out["_lbp"] = {"converged": result.converged, "iterations": result.iterations,
+                   "last_change": result.last_change}
+    return out
+
+
+def table_rows(scores: dict, group: str = "all", metrics=("brier", "logloss", "auc", "wall_recall")) -> list:
+    """Rows ``[name, metric, "lo-hi", ...]`` of a :func:`score` result for one group (for a table)."""
+    rows = []
+    for name, groups in scores.items():
+        if name.startswith("_"):
+            continue
+        entry = groups[group]
+        row = [name]
+        for m in metrics:
+            row.append(entry[m])
+            lo, hi = entry.get(m + "_ci", (float("nan"), float("nan")))
+            row.append(f"{lo:.4f}-{hi:.4f}")
+        rows.append(row)
+    return rows

@@ -1,0 +1,64 @@
+"""``crfmap evaluate RECORDING``: scan-split table of a recording (does refining make the map better?)."""
+from __future__ import annotations
+
+import argparse
+import json
+
+from crfmap.errors import InputError
+
+
+def add_parser(sub):
+    p = sub.add_parser(
+        "evaluate",
+        help="score the raw grid, baselines and a preset against scans the map never saw",
+        description="Scan-split validation (crfmap.assess.scansplit): build the grid from the even scans of a "
+        "CARMEN log or ROS bag, refine it, and score P(occupied) against what the odd scans observe (a "
+        "returned beam's end cell occupied, cells it passes free): Brier score, log-loss, AUC and recall of "
+        "observed walls, for all cells the odd scans observed and for those the even scans saw / never saw, "
+        "with spatial-block bootstrap intervals.",
+    )
+    p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
+    p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
+    p.add_argument("--preset", default="certainty", choices=["certainty", "thesis"], help="the preset to score")
+    p.add_argument("--parity", type=int, default=0, choices=[0, 1], help="build from even (0) or odd (1) scans")
+    p.add_argument("--boot", type=int, default=200, help="bootstrap resamples (0: no intervals)")
+    p.add_argument("--block", type=int, default=16, help="bootstrap block side in cells")
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap")
+    p.add_argument("--group", default="all", choices=["all", "seen", "unseen"], help="cells to tabulate")
+    p.add_argument("--json", action="store_true", help="print the full scores as one JSON object")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from crfmap.assess.scansplit import compare, scan_split, table_rows
+    from crfmap.commands.build import load_recording
+    from crfmap.repro.report import markdown_table
+
+    if args.boot < 0:
+        raise InputError("--boot", f"must be non-negative, got {args.boot}")
+    if args.block < 1:
+        raise InputError("--block", f"must be a positive number of cells, got {args.block}")
+    if not args.resolution > 0:
+        raise InputError("--resolution", f"must be positive, got {args.resolution}")
+    rec = load_recording(args.input)
+    split = scan_split(rec.scans, args.resolution, parity=args.parity)
+    scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed)
+    if args.json:
+        print(json.dumps(_finite(scores)))
+        return 0
+    header = ["method", "Brier", "95% CI", "log-loss", "95% CI", "AUC", "95% CI", "wall recall", "95% CI"]
+    print(f"{args.input}: {split.shape[1]}x{split.shape[0]} cells, {args.group} cells the second half observed "
+          f"({scores['raw'][args.group]['cells']}); {args.preset}: {'converged' if scores['_lbp']['converged'] else 'NOT converged'}")
+    print(markdown_table(header, table_rows(scores, args.group)), end="")
+    return 0
+
+
+def _finite(value):
+    """JSON-safe copy: NaN becomes null."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and value != value:
+        return None
+    return value

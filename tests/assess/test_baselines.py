@@ -1,0 +1,49 @@
+"""Baselines against slow obvious references."""
+import itertools
+
+import numpy as np
+import pytest
+
+from crfmap.assess.baselines import all_baselines, graph_cut, grey_closing, window_mean, window_median
+from crfmap.assess.scansplit import ScanSplit
+
+
+def _grid(seed=0, shape=(7, 9)):
+    rng = np.random.default_rng(seed)
+    p = np.round(rng.uniform(0, 1, shape), 2)
+    p[rng.uniform(size=shape) < 0.3] = 0.5
+    return p
+
+
+def _window(p, y, x):
+    return [p[j, i] for j in range(y - 1, y + 2) for i in range(x - 1, x + 2) if 0 <= j < p.shape[0] and 0 <= i < p.shape[1]]
+
+
+def test_window_filters_match_loops():
+    p = _grid()
+    mean, med, close = window_mean(p), window_median(p), grey_closing(p)
+    dil = np.array([[max(_window(p, y, x)) for x in range(p.shape[1])] for y in range(p.shape[0])])
+    for y, x in itertools.product(range(p.shape[0]), range(p.shape[1])):
+        known = [v for v in _window(p, y, x) if v != 0.5]
+        assert mean[y, x] == pytest.approx(np.mean(known) if known else 0.5)
+        assert med[y, x] == pytest.approx(np.median(known) if known else 0.5)
+        assert close[y, x] == pytest.approx(min(_window(dil, y, x)))
+
+
+def test_graph_cut_is_the_brute_force_map():
+    from crfmap.bench.external import crf_energy
+
+    p = _grid(1, (3, 4))
+    hidden = [[3.0, 1.0], [1.0, 3.0]]
+    best = min((np.array(bits, bool).reshape(3, 4) for bits in itertools.product([0, 1], repeat=12)),
+               key=lambda s: crf_energy(s, p, hidden))
+    assert np.array_equal(graph_cut(p, hidden), best.astype(float))
+
+
+def test_all_baselines_names_and_ranges():
+    rng = np.random.default_rng(0)
+    sp = ScanSplit(*(rng.integers(0, 3, (20, 20)) for _ in range(4)))
+    out = all_baselines(sp, thesis_max_iter=50)
+    assert set(out) == {"raw", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut"}  # no scans: no log-odds
+    for name, p in out.items():
+        assert p.shape == (20, 20) and p.min() >= 0 and p.max() <= 1, name

@@ -1,0 +1,86 @@
+"""Scan-split validation on small synthetic recordings, against slow obvious references."""
+import numpy as np
+import pytest
+
+from crfmap.assess.scansplit import ScanSplit, scan_split, score, split_scans
+from crfmap.errors import InputError
+from crfmap.mapping.builder import build_grid, count_hits
+from crfmap.recording import ScanSet
+
+
+def _room(n_scans=6, seed=0):
+    """A laser at the centre of a 2 m square room, turning: every beam hits a wall."""
+    rng = np.random.default_rng(seed)
+    n = 90
+    angles = np.linspace(-np.pi, np.pi, n, endpoint=False)
+    poses = np.column_stack([1 + 0.05 * rng.standard_normal(n_scans), 1 + 0.05 * rng.standard_normal(n_scans),
+                             rng.uniform(-0.1, 0.1, n_scans)])
+    ranges = np.empty((n_scans, n), np.float32)
+    for i, (x, y, yaw) in enumerate(poses):
+        a = angles + yaw
+        with np.errstate(divide="ignore"):
+            tx = np.where(np.cos(a) > 0, (1.95 - x) / np.cos(a), (0.05 - x) / np.cos(a))
+            ty = np.where(np.sin(a) > 0, (1.95 - y) / np.sin(a), (0.05 - y) / np.sin(a))
+        ranges[i] = np.minimum(np.abs(tx), np.abs(ty))
+    return ScanSet(ranges, -np.pi, 2 * np.pi / n, 0.01, 5.0, poses, np.arange(n_scans, dtype=float))
+
+
+def test_halves_are_the_even_and_odd_scans_on_one_grid():
+    scans = _room()
+    sp = scan_split(scans, 0.1, bounds=(0, 0, 2, 2))
+    h1, e1 = count_hits(split_scans(scans, 0), 0.1, bounds=(0, 0, 2, 2))
+    h2, e2 = count_hits(split_scans(scans, 1), 0.1, bounds=(0, 0, 2, 2))
+    assert np.array_equal(sp.first_hits, h1) and np.array_equal(sp.second_passes, e2)
+    assert np.array_equal(sp.first_hits + sp.second_hits, count_hits(scans, 0.1, bounds=(0, 0, 2, 2))[0])
+    raw = build_grid(split_scans(scans, 0), 0.1, bounds=(0, 0, 2, 2)).probability
+    assert np.allclose(sp.raw_probability(), raw)
+
+
+def _naive(p, y):
+    brier = np.mean((p - y) ** 2)
+    pos, neg = p[y == 1], p[y == 0]
+    auc = np.mean([(a > b) + 0.5 * (a == b) for a in pos for b in neg])
+    return brier, auc, np.mean(pos > 0.5)
+
+
+def test_scores_match_a_naive_reference_and_the_unseen_group_is_half():
+    rng = np.random.default_rng(1)
+    shape = (12, 15)
+    h1, e1, h2, e2 = (rng.integers(0, 3, shape) for _ in range(4))
+    h1[:, :3] = e1[:, :3] = 0  # never seen by the first half
+    sp = ScanSplit(h1, e1, h2, e2)
+    pred = np.round(rng.uniform(0, 1, shape), 1)  # ties on purpose
+    out = score(sp, {"p": pred, "raw": sp.raw_probability()}, n_boot=0)
+    for group in ("all", "seen", "unseen"):
+        m = sp.group(group)
+        y = ((h2 >= e2) & (h2 > 0))[m].astype(float)
+        brier, auc, recall = _naive(pred[m], y)
+        assert out["p"][group]["brier"] == pytest.approx(brier)
+        assert out["p"][group]["auc"] == pytest.approx(auc)
+        assert out["p"][group]["wall_recall"] == pytest.approx(recall)
+    assert out["raw"]["unseen"]["brier"] == 0.25 and out["raw"]["unseen"]["auc"] == 0.5
+
+
+def test_bootstrap_is_seeded_covers_the_estimate_and_pairs_differences():
+    rng = np.random.default_rng(2)
+    shape = (64, 64)
+    h1, e1, h2, e2 = (rng.integers(0, 3, shape) for _ in range(4))
+    sp = ScanSplit(h1, e1, h2, e2)
+    preds = {"raw": sp.raw_probability(), "same": sp.raw_probability().copy(), "half": np.full(shape, 0.5)}
+    a = score(sp, preds, n_boot=50, block=8, seed=3, reference="raw")
+    b = score(sp, preds, n_boot=50, block=8, seed=3, reference="raw")
+    assert a["half"]["all"]["brier_ci"] == b["half"]["all"]["brier_ci"]
+    lo, hi = a["raw"]["all"]["brier_ci"]
+    assert lo < a["raw"]["all"]["brier"] < hi
+    assert a["same"]["all"]["brier_diff_ci"] == (0.0, 0.0)  # paired: identical predictions never differ
+    assert a["half"]["all"]["brier"] == pytest.approx(0.25)
+
+
+def test_bad_input_is_named():
+    sp = ScanSplit(*(np.zeros((2, 2), int) for _ in range(4)))
+    with pytest.raises(InputError, match="shape"):
+        score(sp, {"p": np.zeros((3, 3))})
+    with pytest.raises(InputError, match="probabilities"):
+        score(sp, {"p": np.full((2, 2), 2.0)})
+    with pytest.raises(InputError, match="non-negative"):
+        ScanSplit(*(np.full((2, 2), -1) for _ in range(4)))

@@ -1,0 +1,64 @@
+"""Presets: the thesis's tables unchanged, the certainty preset's promises, maps vs counts."""
+import numpy as np
+import pytest
+
+from crfmap.crf.lbp import infer
+from crfmap.crf.presets import CRITICAL_COUPLING, PRESETS, evidence_from_probability, get_preset
+from crfmap.errors import InputError
+
+
+def test_thesis_preset_is_the_thesis_default():
+    p = np.array([[0.9, 0.5, 0.2], [0.1, 0.6, 0.5]])
+    a = get_preset("thesis").refine(p, max_iter=200, tol=1e-9).beliefs.probability
+    b = infer(p, [[10, 1], [1, 10]], [[1, 0], [0, 1]], max_iter=200, tol=1e-9).beliefs.probability
+    assert np.allclose(a, b)
+
+
+def test_certainty_is_subcritical_and_a_strong_wall_survives_four_free_neighbours():
+    c = get_preset("certainty")
+    assert c.coupling < CRITICAL_COUPLING
+    hits = np.zeros((5, 5), int)
+    passes = np.full((5, 5), 30)
+    hits[2, 2], passes[2, 2] = 20, 0  # a wall seen 20 times, free all around
+    b = c.refine(hits=hits, passes=passes).beliefs.probability
+    assert b[2, 2] > 0.5
+    hits[2, 2] = 1  # seen once: yields to its neighbours
+    assert c.refine(hits=hits, passes=passes).beliefs.probability[2, 2] < 0.5
+
+
+def test_never_seen_space_far_from_observations_stays_unknown():
+    hits = np.zeros((30, 30), int)
+    passes = np.zeros((30, 30), int)
+    passes[:5, :5] = 3
+    hits[5, :5] = 2
+    r = get_preset("certainty").refine(hits=hits, passes=passes)
+    b = r.beliefs.probability
+    assert r.converged
+    assert np.all(b[15:, 15:] == 0.5)  # more than `margin` cells from any observation
+    assert b[6, 2] != 0.5  # next to observations: filled in
+
+
+def test_a_map_file_gives_what_its_counts_give():
+    rng = np.random.default_rng(0)
+    hits, passes = rng.integers(0, 4, (10, 12)), rng.integers(0, 4, (10, 12))
+    hits[:, :2] = passes[:, :2] = 0
+    passes[(hits == passes) & (hits > 0)] += 1  # a map cannot tell "never seen" from "as many hits as passes"
+    c = get_preset("certainty")
+    prob = 0.5 + np.arctan(hits - passes) / np.pi  # the grid crfmap builds from these counts
+    assert np.allclose(evidence_from_probability(prob), hits - passes)
+    from_counts = c.refine(hits=hits, passes=passes).beliefs.probability
+    from_map = c.refine(prob).beliefs.probability
+    assert np.allclose(from_counts, from_map)
+
+
+def test_trinary_map_values_are_the_strongest_observations():
+    c = get_preset("certainty")
+    u = c.observation(probability=np.array([0.0, 0.5, 1.0]))
+    s = 1 / (1 + np.exp(-c.limit))
+    assert np.allclose(u, [1 - s, 0.5, s])
+
+
+def test_unknown_preset_is_named():
+    with pytest.raises(InputError, match="preset"):
+        get_preset("nope")
+    assert set(PRESETS) == {"thesis", "certainty"}

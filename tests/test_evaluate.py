@@ -1,0 +1,57 @@
+"""``crfmap evaluate``: the scan-split table of a recording, and one-line errors."""
+import json
+
+import numpy as np
+import pytest
+
+from crfmap.cli import main
+
+
+def _room_log(path, n_scans=8, seed=0):
+    """A CARMEN log of a laser turning in a 3 m x 2 m room with a pillar (181 beams over 180 degrees)."""
+    rng = np.random.default_rng(seed)
+    angles = np.linspace(-np.pi / 2, np.pi / 2, 181)
+    lines = []
+    for i in range(n_scans):
+        x, y, yaw = 1.5 + 0.1 * rng.standard_normal(), 1.0 + 0.1 * rng.standard_normal(), 2 * np.pi * i / n_scans
+        a = angles + yaw
+        with np.errstate(divide="ignore"):
+            tx = np.where(np.cos(a) > 0, (2.95 - x) / np.cos(a), (0.05 - x) / np.cos(a))
+            ty = np.where(np.sin(a) > 0, (1.95 - y) / np.sin(a), (0.05 - y) / np.sin(a))
+        r = np.minimum(np.abs(tx), np.abs(ty))
+        ranges = " ".join(f"{v:.3f}" for v in r)
+        lines.append(f"FLASER 181 {ranges} {x:.4f} {y:.4f} {yaw:.4f} {x:.4f} {y:.4f} {yaw:.4f} {i:.1f} host {i:.1f}")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_evaluate_table_and_json_match_the_library(tmp_path, capsys):
+    from crfmap.assess.scansplit import compare, scan_split
+    from crfmap.io.carmen import read_carmen
+
+    log = _room_log(tmp_path / "room.log")
+    assert main(["evaluate", str(log), "--resolution", "0.1", "--boot", "5"]) == 0
+    out = capsys.readouterr().out
+    for name in ("raw", "logodds", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut", "certainty"):
+        assert f"| {name} |" in out
+    assert main(["evaluate", str(log), "--resolution", "0.1", "--boot", "5", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    expected = compare(scan_split(read_carmen(log).scans, 0.1), n_boot=5)
+    assert got["certainty"]["all"]["brier"] == pytest.approx(expected["certainty"]["all"]["brier"])
+    assert got["raw"]["unseen"]["cells"] == expected["raw"]["unseen"]["cells"]
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--boot", "-1"], ["--boot"]),
+    (["--resolution", "0"], ["--resolution"]),
+])
+def test_evaluate_bad_options_one_line(tmp_path, capsys, args, words):
+    log = _room_log(tmp_path / "room.log", n_scans=2)
+    assert main(["evaluate", str(log)] + args) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and all(w in err for w in words)
+
+
+def test_evaluate_missing_file(tmp_path, capsys):
+    assert main(["evaluate", str(tmp_path / "nope.log")]) == 2
+    assert "nope.log" in capsys.readouterr().err
