@@ -95,10 +95,10 @@ def test_touching_a_module_reruns_only_the_notebooks_that_import_it(checkout_cop
 
 def test_static_dependencies_cover_what_a_notebook_really_imports():
     """Reference: execute each notebook's import lines in a fresh interpreter and list the crfmap files loaded."""
-    probe = ("import json, sys\nfrom crfmap.repro.dependencies import code_cells\n"
-             "lines = [l for c in code_cells(sys.argv[1]) for l in ''.join(c['source']).splitlines()\n"
-             "         if l.startswith(('import ', 'from ')) and not l.rstrip().endswith('(')]\n"
-             "exec('\\n'.join(lines))\n"
+    probe = ("import ast, json, sys\nfrom crfmap.repro.dependencies import code_cells\n"
+             "nodes = [n for c in code_cells(sys.argv[1]) for n in ast.walk(ast.parse(''.join(c['source'])))\n"
+             "         if isinstance(n, (ast.Import, ast.ImportFrom))]\n"
+             "exec('\\n'.join(ast.unparse(n) for n in nodes))\n"
              "print(json.dumps(sorted(m.__file__ for n, m in sys.modules.items()\n"
              "                        if n.startswith('crfmap') and getattr(m, '__file__', None))))\n")
     runs = {nb: subprocess.Popen([sys.executable, "-c", probe, str(nb)], stdout=subprocess.PIPE, text=True)
