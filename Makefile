@@ -23,8 +23,11 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m ipykernel install --sys-prefix --name python3 --env NUMBA_CACHE_DIR "$(NUMBA_CACHE_DIR)" >/dev/null
 	echo "import os; os.environ.setdefault('NUMBA_CACHE_DIR', '$(NUMBA_CACHE_DIR)')" > \
 	  "$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/crfmap_numba_cache.pth"
-	# notebook outputs never reach git (nbstripout filter; only in a real clone, not a worktree)
-	if [ -d .git ]; then $(BIN)/nbstripout --install --attributes .gitattributes; fi
+	# notebook outputs never reach git (nbstripout filter; only in a real clone, not a worktree);
+	# --keep-id: the committed cell ids stay, so installing the filter does not rewrite every notebook
+	if [ -d .git ]; then $(BIN)/nbstripout --install --attributes .gitattributes && \
+	  git config filter.nbstripout.clean '"$(CURDIR)/$(BIN)/python" -m nbstripout --keep-id' && \
+	  git config diff.ipynb.textconv '"$(CURDIR)/$(BIN)/python" -m nbstripout --keep-id -t'; fi
 	touch $(STAMP)
 
 warm: $(STAMP)
