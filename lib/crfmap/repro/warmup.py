@@ -44,6 +44,17 @@ def is_cold() -> bool:
     return False
 
 
+def _stamp() -> Path:
+    return (cache_dir() or LIBRARY / "crf" / "__pycache__") / "crfmap-warmed.stamp"
+
+
+def is_warm() -> bool:
+    """Whether :func:`warm` ran since the last change to the code ``crfmap infer`` runs (then it has nothing to do)."""
+    sources = [*(LIBRARY / "crf").glob("*.py"), LIBRARY / "cli.py", LIBRARY / "commands" / "infer.py"]
+    stamp = _stamp()
+    return stamp.is_file() and stamp.stat().st_mtime > max(p.stat().st_mtime for p in sources if p.is_file())
+
+
 def warm(verbose: bool = True) -> float:
     """Run ``crfmap infer`` on a tiny grid with every schedule and dtype; returns the seconds it took."""
     import numpy as np
@@ -64,6 +75,8 @@ def warm(verbose: bool = True) -> float:
             if status != 0:
                 raise RuntimeError(f"warm-up call `crfmap {' '.join(argv)}` failed")
     seconds = time.perf_counter() - start
+    _stamp().parent.mkdir(parents=True, exist_ok=True)
+    _stamp().touch()
     if verbose:
         print(f"numba kernels ready in {seconds:.1f} s (cache: {cache_dir() or 'beside the sources'})")
     return seconds
@@ -78,6 +91,9 @@ def announce_if_cold() -> None:
 
 
 if __name__ == "__main__":
-    if is_cold():
-        print("compiling kernels (first run only) ...", flush=True)
-    warm(verbose=True)
+    if is_warm():
+        print(f"numba cache already warm ({cache_dir() or 'beside the sources'})")
+    else:
+        if is_cold():
+            print("compiling kernels (first run only) ...", flush=True)
+        warm(verbose=True)
