@@ -1,5 +1,6 @@
 """The report pulls its numbers, tables and figures from generated files."""
 import importlib
+import json
 
 import pytest
 
@@ -22,7 +23,13 @@ def out(tmp_path, monkeypatch):
     importlib.reload(crfmap.repro.paper)
 
 
-def test_placeholders_are_filled_from_generated_files(out):
+@pytest.fixture
+def default_run(monkeypatch):
+    """Results saved as the workflow's default run of notebook 04 would save them."""
+    monkeypatch.setenv("CRFMAP_RUN", json.dumps({"notebook": "04_denoising.ipynb", "parameters": {}}))
+
+
+def test_placeholders_are_filled_from_generated_files(out, default_run):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -43,3 +50,47 @@ def test_placeholders_are_filled_from_generated_files(out):
     assert "| a | b |" in result and "| x | n/a |" in result
     assert "![A demo](../../figures/fig_demo.png)" in result
     assert "number absent.x not generated" in result and "Not generated when this report was built" in result
+
+
+def _table(report, name="table14_denoising"):
+    report.save_table(name, ["sigma", "MSE"], [[0.42, 0.083]])
+
+
+@pytest.mark.parametrize("run, why", [
+    ({"notebook": "04_denoising.ipynb", "parameters": {"quick": True}}, "quick run of 04_denoising.ipynb"),
+    ({"notebook": "04_denoising.ipynb", "parameters": {"noise": 0.5}}, "non-default parameters noise=0.5 (default 0.42)"),
+    ({"notebook": None, "parameters": {}}, "made outside a known notebook"),
+])
+def test_paper_refuses_a_quick_or_non_default_result_naming_the_file(out, monkeypatch, capsys, run, why):
+    from crfmap.repro import paper, report
+
+    monkeypatch.setenv("CRFMAP_RUN", json.dumps({"notebook": "04_denoising.ipynb", "parameters": {}}))
+    report.save_numbers("denoising", {"mse": 0.01})
+    monkeypatch.setenv("CRFMAP_RUN", json.dumps(run))
+    _table(report)
+    template = out / "t.md"
+    template.write_text("{{number:denoising.mse}}\n{{table:table14_denoising}}\n")
+    target = out / "paper" / "generated" / "paper.md"
+    assert paper.main(["--template", str(template), "--output", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "table14_denoising.md" in err[0] and why in err[0], err
+    assert not target.exists()  # nothing written
+    # the same file from a default run is accepted
+    monkeypatch.setenv("CRFMAP_RUN", json.dumps({"notebook": "04_denoising.ipynb", "parameters": {}}))
+    _table(report)
+    assert paper.main(["--template", str(template), "--output", str(target)]) == 0
+    assert "| 0.42 | 0.083 |" in target.read_text() and "provenance" not in target.read_text()
+
+
+def test_a_result_without_a_run_record_is_refused(out):
+    from crfmap.errors import InputError
+    from crfmap.repro import paper
+
+    legacy = out / "paper" / "generated" / "old.md"
+    legacy.parent.mkdir(parents=True)
+    legacy.write_text("| a |\n|---|\n| 1 |\n")
+    template = out / "t.md"
+    template.write_text("{{table:old}}\n")
+    with pytest.raises(InputError, match=r"old.md: records no run parameters"):
+        paper.build_paper(template, out / "p.md")
+    assert paper.build_paper(template, out / "p.md", strict=False).read_text().startswith("| a |")

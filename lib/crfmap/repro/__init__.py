@@ -4,7 +4,11 @@ Public API (imported on first use, so ``import crfmap.repro`` stays cheap):
 
 - :mod:`crfmap.repro.report`: ``save_figure``, ``save_table``, ``save_numbers``, ``load_numbers``, ``markdown_table``
 - :mod:`crfmap.repro.paper`: ``build_paper``, ``render``
-- :mod:`crfmap.repro.reproduce`: ``execute``, ``notebooks``, ``data_needed``
+- :mod:`crfmap.repro.dependencies`: ``notebooks``, ``data_needed``, ``library_sources``, ``declared_outputs``, ``parameter_defaults``
+- :mod:`crfmap.repro.run`: ``run_notebook`` (one notebook, papermill, into an output root)
+- :mod:`crfmap.repro.sweep`: ``load``, ``collect`` (parameter grids over a notebook)
+- :mod:`crfmap.repro.provenance`: what run made a result (``current``, ``read``, ``problem``)
+- :mod:`crfmap.repro.reproduce`: the workflow (``workflow/Snakefile``) from the command line
 """
 from __future__ import annotations
 
@@ -18,9 +22,12 @@ _API = {
     "markdown_table": "report",
     "build_paper": "paper",
     "render": "paper",
-    "execute": "reproduce",
-    "notebooks": "reproduce",
-    "data_needed": "reproduce",
+    "run_notebook": "run",
+    "notebooks": "dependencies",
+    "data_needed": "dependencies",
+    "library_sources": "dependencies",
+    "declared_outputs": "dependencies",
+    "parameter_defaults": "dependencies",
 }
 __all__ = sorted(_API)
 

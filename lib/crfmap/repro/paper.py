@@ -8,7 +8,11 @@ so a number in the report is always the one the code produced:
 - ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``).
 
 The result is ``paper/generated/paper.md``. A placeholder whose file is missing renders as a
-visible "not generated" note, and :func:`build_paper` lists them.
+visible "not generated" note, and :func:`build_paper` lists them. The paper is built only from full
+default runs: with ``strict`` (the default, and what the workflow's paper rule runs) a result made by a
+quick run or with non-default parameters (:func:`crfmap.repro.provenance.problem`) stops the build
+with one line naming the file. ``python -m crfmap.repro.paper`` is that build on the command line
+(exit status 2 and one stderr line on a refusal).
 """
 from __future__ import annotations
 
@@ -17,8 +21,12 @@ import os
 import re
 from pathlib import Path
 
+import sys
+
 from crfmap import paths
+from crfmap.errors import InputError
 from crfmap.io.atomic import atomic_path
+from crfmap.repro import provenance
 
 PLACEHOLDER = re.compile(r"\{\{(table|figure|number):([^}|]+)(?:\|([^}]*))?\}\}")
 
@@ -27,7 +35,14 @@ def _relative(target: Path, start: Path) -> str:
     return Path(os.path.relpath(target, start)).as_posix()
 
 
-def render(template: str, out_dir: Path, missing: list) -> str:
+def _check(path: Path, strict: bool) -> None:
+    why = provenance.problem(path) if strict else None
+    if why:
+        raise InputError(path, why.split(": ", 1)[1])
+
+
+def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
+    """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
     def replace(match):
         kind, name, extra = match.group(1), match.group(2).strip(), match.group(3)
         if kind == "table":
@@ -35,12 +50,14 @@ def render(template: str, out_dir: Path, missing: list) -> str:
             if not f.exists():
                 missing.append(f"table {name}")
                 return f"*(table {name} not generated)*"
-            return f.read_text().rstrip("\n")
+            _check(f, strict)
+            return provenance.strip(f.read_text()).rstrip("\n")
         if kind == "figure":
             f = paths.FIGURES / f"{name}.png"
             if not f.exists():
                 missing.append(f"figure {name}")
                 return f"*(figure {name} not generated)*"
+            _check(f, strict)
             caption = extra or name
             return f"![{caption}]({_relative(f, out_dir)})"
         file_name, *keys = name.split(".")
@@ -52,6 +69,7 @@ def render(template: str, out_dir: Path, missing: list) -> str:
         except (OSError, KeyError, IndexError, ValueError):
             missing.append(f"number {name}")
             return f"*(number {name} not generated)*"
+        _check(f, strict)
         if value is None:
             return "n/a"
         return format(value, extra) if extra else str(value)
@@ -59,15 +77,18 @@ def render(template: str, out_dir: Path, missing: list) -> str:
     return PLACEHOLDER.sub(replace, template)
 
 
-def build_paper(template: Path | None = None, output: Path | None = None, publish: bool = True) -> Path:
+def build_paper(template: Path | None = None, output: Path | None = None, strict: bool = True,
+                publish: bool = True) -> Path:
     """Render the template into ``paper/generated/paper.md``; returns its path.
 
-    ``publish=True`` also builds ``paper.pdf`` and ``paper.html`` beside it (:mod:`crfmap.repro.publish`).
+    With ``strict`` a quick or non-default result raises :class:`crfmap.errors.InputError` naming
+    the file, before anything is written. ``publish=True`` also builds ``paper.pdf`` and
+    ``paper.html`` beside it (:mod:`crfmap.repro.publish`).
     """
     template = Path(template or paths.PAPER / "paper.md")
     output = Path(output or paths.GENERATED / "paper.md")
     missing: list = []
-    text = render(template.read_text(), output.parent, missing)
+    text = render(template.read_text(), output.parent, missing, strict=strict)
     if missing:
         text += "\n\n---\nNot generated when this report was built: " + ", ".join(missing) + "\n"
     with atomic_path(output) as tmp:
@@ -77,3 +98,40 @@ def build_paper(template: Path | None = None, output: Path | None = None, publis
 
         publish_paper(output)
     return output
+
+
+def main(argv=None) -> int:
+    """``python -m crfmap.repro.paper``: build the paper from full default runs (the workflow's paper rule)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m crfmap.repro.paper", description=main.__doc__)
+    parser.add_argument("--template", type=Path, help="default: paper/paper.md")
+    parser.add_argument("--output", type=Path, help="default: paper/generated/paper.md")
+    parser.add_argument("--timings", type=Path, help="also write each notebook's run time here (JSON)")
+    parser.add_argument("--executed", type=Path, nargs="*", default=[], help="the executed notebooks")
+    args = parser.parse_args(argv)
+    try:
+        out = build_paper(args.template, args.output)
+    except InputError as error:
+        print(f"paper: refused: {error}", file=sys.stderr)
+        return 2
+    if args.timings:
+        write_timings(args.executed, args.timings)
+    print(f"paper: {out}")
+    return 0
+
+
+def write_timings(executed, target) -> dict:
+    """Each executed notebook's run time (papermill's record) as JSON ``{"seconds": {...}, "total_seconds": t}``."""
+    seconds = {}
+    for notebook in executed:
+        meta = json.loads(Path(notebook).read_text()).get("metadata", {}).get("papermill", {})
+        seconds[Path(notebook).name] = meta.get("duration")
+    timings = {"seconds": seconds, "total_seconds": sum(v for v in seconds.values() if v)}
+    with atomic_path(Path(target)) as tmp:
+        Path(tmp).write_text(json.dumps(timings, indent=2, sort_keys=True) + "\n")
+    return timings
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,7 +1,9 @@
 """Saving what notebooks produce: figures to ``figures/``, tables and numbers to ``paper/generated/``.
 
 Every notebook saves through these functions (and so through :mod:`crfmap.paths`), atomically,
-so the paper always quotes the numbers the code produced.
+so the paper always quotes the numbers the code produced. Every saved file records the run that made
+it (notebook, parameters, ``quick``; :mod:`crfmap.repro.provenance`), so the paper build can refuse
+a quick or non-default result.
 """
 from __future__ import annotations
 
@@ -13,6 +15,9 @@ import numpy as np
 
 from crfmap import paths
 from crfmap.io.atomic import atomic_path
+from crfmap.repro import provenance, warmup
+
+warmup.announce_if_cold()  # a notebook's first cell imports this module: compile there, visibly
 
 
 def _clean(value):
@@ -39,7 +44,8 @@ def save_figure(fig, name: str, dpi: int = 150, vector: bool = True) -> Path:
     paths.FIGURES.mkdir(parents=True, exist_ok=True)
     target = paths.FIGURES / f"{name}.png"
     with atomic_path(target) as tmp:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
+        stamp = json.dumps(_clean(provenance.current()), sort_keys=True)
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png", metadata={provenance.PNG_KEY: stamp})
     if vector:
         with atomic_path(target.with_suffix(".pdf")) as tmp:
             fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="pdf")
@@ -47,16 +53,23 @@ def save_figure(fig, name: str, dpi: int = 150, vector: bool = True) -> Path:
 
 
 def save_numbers(name: str, numbers: dict) -> Path:
-    """Save a dict of numbers as ``paper/generated/<name>.json`` (NaN/inf become null)."""
+    """Save a dict of numbers as ``paper/generated/<name>.json`` (NaN/inf become null).
+
+    The file also holds the run that made it under ``"_provenance"``.
+    """
     paths.GENERATED.mkdir(parents=True, exist_ok=True)
     target = paths.GENERATED / f"{name}.json"
+    data = {**_clean(numbers), provenance.KEY: _clean(provenance.current())}
     with atomic_path(target) as tmp:
-        Path(tmp).write_text(json.dumps(_clean(numbers), indent=2, sort_keys=True) + "\n")
+        Path(tmp).write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
     return target
 
 
 def load_numbers(name: str) -> dict:
-    return json.loads((paths.GENERATED / f"{name}.json").read_text())
+    """The numbers saved by :func:`save_numbers` (without the run record)."""
+    data = json.loads((paths.GENERATED / f"{name}.json").read_text())
+    data.pop(provenance.KEY, None)
+    return data
 
 
 def format_cell(value, digits: int = 4) -> str:
@@ -84,6 +97,7 @@ def save_table(name: str, header, rows, digits: int = 4, caption: str = "") -> P
     """Save a table as ``paper/generated/<name>.md`` (Markdown) and ``<name>.json`` (raw values)."""
     paths.GENERATED.mkdir(parents=True, exist_ok=True)
     text = (f"{caption}\n\n" if caption else "") + markdown_table(header, rows, digits)
+    text += provenance.MD_PREFIX + json.dumps(_clean(provenance.current()), sort_keys=True) + " -->\n"
     target = paths.GENERATED / f"{name}.md"
     with atomic_path(target) as tmp:
         Path(tmp).write_text(text)

@@ -1,33 +1,32 @@
-"""Execute every numbered notebook headlessly with papermill, then build the paper.
+"""Reproduce the paper: run the Snakemake workflow (``workflow/Snakefile``) over every notebook.
 
-``python -m crfmap.repro.reproduce`` (what ``make reproduce`` runs) executes ``notebooks/NN_*.ipynb`` in
-order into ``out/notebooks/``, regenerating ``figures/`` and ``paper/generated/``, and then renders
-the paper. ``--quick`` passes ``quick=True`` to every notebook (the small settings CI uses);
-``--only 04`` runs the notebooks whose names start with the given prefixes.
+``python -m crfmap.repro.reproduce`` (what ``make reproduce`` runs) first names any shared-data file
+the notebooks need and this machine lacks (and runs nothing), then runs the workflow with
+``--cores 2``: each notebook executes with papermill only when it, a library module it imports, a data
+file it reads or its parameters changed since its figures and tables were made; independent notebooks
+run in parallel; the paper is rendered on top (:mod:`crfmap.repro.paper`). A second run with nothing
+changed does nothing and says so.
+
+- ``--quick``: the small settings CI uses, into ``out/quick/`` (never the checkout's figures/ or the paper);
+- ``--only 04 07``: the notebooks whose names start with these prefixes (not the paper);
+- ``--sweep 04_noise``: the sweep ``workflow/sweeps/04_noise.yaml`` (:mod:`crfmap.repro.sweep`);
+- ``--dry-run``: say what would run, and why; ``--profile workflow/profiles/slurm``: on a cluster;
+- anything after ``--`` goes to snakemake as is.
 """
 from __future__ import annotations
 
 import argparse
 import os
-import re
+import subprocess
 import sys
 import time
 from pathlib import Path
 
 from crfmap import paths
 from crfmap.errors import DataMissingError
+from crfmap.repro.dependencies import data_needed, notebooks
 
-
-def notebooks(only=None) -> list[Path]:
-    found = sorted(p for p in paths.NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
-    if only:
-        found = [p for p in found if any(p.name.startswith(prefix) for prefix in only)]
-    return found
-
-
-def data_needed(notebook: Path) -> list[str]:
-    """The shared-data files (relative to :func:`crfmap.paths.data_root`) a notebook reads with ``data_file``."""
-    return sorted(set(re.findall(r'data_file\(\\"([^"\\]+)\\"\)', Path(notebook).read_text())))
+SNAKEFILE = paths.PROJECT_ROOT / "workflow" / "Snakefile"
 
 
 def missing_data(todo) -> list[str]:
@@ -42,65 +41,58 @@ def missing_data(todo) -> list[str]:
     return lines
 
 
-def execute(notebook: Path, parameters: dict | None = None, output_dir: Path | None = None,
-            progress: bool = False, timeout: int = 3600) -> Path:
-    """Execute one notebook with papermill (kernel ``python3``), cwd = the notebooks folder."""
-    import papermill as pm
-
-    output_dir = Path(output_dir or (paths.OUT / "notebooks"))
-    output_dir.mkdir(parents=True, exist_ok=True)
-    target = output_dir / notebook.name
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    pm.execute_notebook(
-        str(notebook), str(target), parameters=parameters or {}, kernel_name="python3",
-        cwd=str(notebook.parent), progress_bar=progress, execution_timeout=timeout,
-    )
-    return target
+def snakemake_command(targets=(), cores=2, directory=None, quick=False, dry_run=False, profile=None,
+                      extra=()) -> list[str]:
+    """The ``snakemake`` command line running the workflow (in this interpreter's environment)."""
+    # targets first: several snakemake options (--config, --quiet) take lists
+    command = [sys.executable, "-m", "snakemake", *targets, "--snakefile", str(SNAKEFILE),
+               "--directory", str(directory or paths.OUTPUT_ROOT), "--cores", str(cores),
+               "--show-failed-logs", "--printshellcmds"]
+    if quick:
+        command += ["--config", "quick=true"]
+    if dry_run:
+        command += ["--dry-run"]
+    if profile:
+        command += ["--workflow-profile", str(profile)]
+    return command + list(extra)
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m crfmap.repro.reproduce", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small settings (quick=True) in every notebook")
+    parser.add_argument("--quick", action="store_true", help="small settings (quick=True), into out/quick/")
     parser.add_argument("--only", nargs="*", help="notebook name prefixes to run, e.g. 04 07")
-    parser.add_argument("--no-paper", action="store_true", help="do not build the paper")
+    parser.add_argument("--no-paper", action="store_true", help="do not build the paper (same as --only with all)")
+    parser.add_argument("--sweep", nargs="*", default=[], help="sweeps of workflow/sweeps/ to run, by name")
+    parser.add_argument("--cores", type=int, default=2)
+    parser.add_argument("--dry-run", "-n", action="store_true", help="only say what would run, and why")
+    parser.add_argument("--profile", type=Path, help="a workflow profile folder, e.g. workflow/profiles/slurm")
+    parser.add_argument("extra", nargs=argparse.REMAINDER, help="-- then arguments for snakemake")
     args = parser.parse_args(argv)
-    from tqdm.auto import tqdm
 
-    todo = notebooks(args.only)
+    todo = [] if args.sweep and not args.only else notebooks(args.only)
+    if args.sweep:
+        from crfmap.repro.sweep import load
+
+        todo += [load(paths.PROJECT_ROOT / "workflow" / "sweeps" / f"{name}.yaml").notebook for name in args.sweep]
     missing = missing_data(todo)
     if missing:  # say it before anything runs, not after half the figures were regenerated
         for line in missing:
             print(f"reproduce: {line}", file=sys.stderr)
         print("reproduce: see data/README.md; nothing was run", file=sys.stderr)
         return 2
-    paths.ensure_output_dirs()
-    params = {"quick": True} if args.quick else {}
-    timings = {}
+    targets = [f"out/runs/{name}/collected.csv" for name in args.sweep]
+    if args.only or (args.no_paper and not args.sweep):
+        targets += [f"notebook_{nb.stem}" for nb in notebooks(args.only)]
+    elif not args.sweep:
+        targets += ["all"]  # every notebook, then the paper (with --quick: no paper)
+    directory = paths.OUT / "quick" if args.quick else paths.OUTPUT_ROOT
+    extra = [a for a in args.extra if a != "--"]
+    command = snakemake_command(targets, args.cores, directory, args.quick, args.dry_run, args.profile, extra)
     start = time.perf_counter()
-    for nb in tqdm(todo, desc="notebooks", unit="nb"):
-        t0 = time.perf_counter()
-        try:
-            execute(nb, params)
-        except Exception as exc:  # papermill re-raises the cell's error; say which notebook and what
-            what = f"{exc.ename}: {exc.evalue}" if hasattr(exc, "ename") else f"{type(exc).__name__}: {exc}"
-            print(f"reproduce: {nb.name} failed: {what.splitlines()[0] if what else ''}", file=sys.stderr)
-            print(f"reproduce: the executed notebook with the traceback is {paths.OUT / 'notebooks' / nb.name}",
-                  file=sys.stderr)
-            return 1
-        timings[nb.name] = time.perf_counter() - t0
-    if not args.no_paper:
-        from crfmap.repro.paper import build_paper
-
-        out = build_paper()
-        print(f"paper: {out}")
-    total = time.perf_counter() - start
-    from crfmap.repro.report import save_numbers
-
-    save_numbers("reproduce_timings", {"seconds": timings, "total_seconds": total, "quick": args.quick})
-    for name, secs in timings.items():
-        print(f"{secs:8.1f} s  {name}")
-    print(f"{total:8.1f} s  total ({len(todo)} notebooks)")
-    return 0
+    code = subprocess.call(command, env={**os.environ, "MPLBACKEND": os.environ.get("MPLBACKEND", "Agg")})
+    print(f"reproduce: {'dry run' if args.dry_run else 'workflow'} {'finished' if code == 0 else 'failed'} "
+          f"in {time.perf_counter() - start:.1f} s (outputs under {directory})", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":

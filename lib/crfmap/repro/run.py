@@ -1,0 +1,65 @@
+"""Run one notebook with papermill into an output root: what each rule of the workflow does.
+
+``python -m crfmap.repro.run NOTEBOOK --output-root DIR [--parameters JSON] --executed OUT.ipynb
+--log LOG.ipynb`` executes ``NOTEBOOK`` (kernel ``python3``, cwd = the notebooks folder) with its
+figures and tables going to ``DIR/figures`` and ``DIR/paper/generated`` (``CRFMAP_OUTPUT_ROOT``)
+and its run recorded in each of them (``CRFMAP_RUN``, :mod:`crfmap.repro.provenance`). The executed
+notebook is written to ``LOG`` as it runs and copied to ``OUT`` only on success; on failure one
+stderr line names the notebook, the error and ``LOG`` (the workflow then deletes the rule's outputs,
+so nothing stale is left).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import sys
+from pathlib import Path
+
+
+def run_notebook(notebook, output_root, parameters=None, executed=None, log=None, timeout=3600) -> Path:
+    """Execute ``notebook`` into ``output_root``; returns the executed notebook's path.
+
+    Raises papermill's execution error (with ``ename``/``evalue``) when a cell fails.
+    """
+    import papermill as pm
+
+    notebook, output_root = Path(notebook).resolve(), Path(output_root).resolve()
+    parameters = dict(parameters or {})
+    log = Path(log or output_root / "out" / "logs" / notebook.name)
+    executed = Path(executed or output_root / "out" / "notebooks" / notebook.name)
+    log.parent.mkdir(parents=True, exist_ok=True)
+    # the kernel inherits this process's environment: where to write, and which run this is
+    os.environ["CRFMAP_OUTPUT_ROOT"] = str(output_root)
+    os.environ["CRFMAP_RUN"] = json.dumps({"notebook": notebook.name, "parameters": parameters})
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    pm.execute_notebook(str(notebook), str(log), parameters=parameters, kernel_name="python3",
+                        cwd=str(notebook.parent), progress_bar=False, execution_timeout=timeout)
+    executed.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(log, executed)
+    return executed
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m crfmap.repro.run", description=__doc__.splitlines()[0])
+    parser.add_argument("notebook", type=Path)
+    parser.add_argument("--output-root", type=Path, required=True)
+    parser.add_argument("--parameters", default="{}", help="JSON object of papermill parameters")
+    parser.add_argument("--executed", type=Path, help="the executed notebook, written on success")
+    parser.add_argument("--log", type=Path, help="the executed notebook as it runs (kept on failure)")
+    args = parser.parse_args(argv)
+    try:
+        run_notebook(args.notebook, args.output_root, json.loads(args.parameters), args.executed, args.log)
+    except Exception as exc:  # papermill re-raises the cell's error: say which notebook, what, and where to look
+        what = f"{exc.ename}: {exc.evalue}" if hasattr(exc, "ename") else f"{type(exc).__name__}: {exc}"
+        first = what.splitlines()[0] if what.strip() else type(exc).__name__
+        log = args.log or args.output_root / "out" / "logs" / args.notebook.name
+        print(f"run: {args.notebook.name} failed: {first} -- the executed notebook with the traceback is {log}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
