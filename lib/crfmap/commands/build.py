@@ -16,16 +16,22 @@ def is_carmen_log(path) -> bool:
     return str(path).lower().endswith(CARMEN_SUFFIXES)
 
 
-def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None):
+def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None):
     """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``.
 
     For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom'
     the raw ODOM track interpolated at the scan stamps ('tf' does not apply).
+    ``max_range`` [m] (CARMEN only): readings at or beyond it are no-returns (see
+    :func:`crfmap.io.carmen.read_carmen`).
     """
-    path = Path(path)
+    from crfmap.checks import check_path_arg
+
+    path = check_path_arg(path, "log or bag")
     if not is_carmen_log(path):
         from crfmap.io.bag_reader import read_bag
 
+        if max_range is not None:
+            raise InputError("--max-range", "applies to CARMEN logs only (a bag's LaserScan states its range_max)")
         return read_bag(path, scan_topic=scan_topic, pose_source=pose_source, laser_mount=laser_mount)
     from crfmap.io.carmen import read_carmen
 
@@ -33,7 +39,7 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None):
         raise InputError("--scan-topic", "applies to bags only, not to CARMEN logs")
     if laser_mount is not None:
         raise InputError("--laser-mount", "applies to bags only (CARMEN FLASER poses are laser poses)")
-    rec = read_carmen(path)
+    rec = read_carmen(path, max_range="auto" if max_range is None else max_range)
     rec.meta["pose_source"] = "truth"
     if pose_source == "tf":
         raise InputError("--pose-source", "a CARMEN log has no tf; use truth (corrected poses) or odom")
@@ -63,6 +69,9 @@ def add_bag_options(p):
     p.add_argument("--scan-topic", default=None, help="LaserScan topic of a bag (default: the only one, or /scan)")
     p.add_argument("--laser-mount", type=float, nargs=3, default=None, metavar=("X", "Y", "YAW"),
                    help="the laser's pose on base_link [m, m, rad], overriding /tf_static")
+    p.add_argument("--max-range", type=float, default=None, metavar="M",
+                   help="CARMEN logs: the laser's maximum range; readings at or beyond it are no-returns "
+                        "(default: the log's PARAM robot_front_laser_max, else see crfmap.io.carmen)")
 
 
 def add_parser(sub):
@@ -85,6 +94,7 @@ def add_parser(sub):
     p.add_argument("--extent", type=float, nargs=4, default=None, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
                    help="area to map in metres (default: the data's bounding box)")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
+    p.add_argument("--force", action="store_true", help="allow OUT_MAP to replace INPUT")
     return p
 
 
@@ -95,9 +105,12 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if not str(out).lower().endswith(GRID_SUFFIXES):
         raise InputError(out, "the map must end in .yaml/.yml (map_server) or .npy")
+    from crfmap.commands.outputs import check_output
+
+    check_output([args.input], out, force=args.force)
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
-                         laser_mount=args.laser_mount)
+                         laser_mount=args.laser_mount, max_range=args.max_range)
     grid = build_grid(rec.scans, args.resolution, model=args.model, extent=args.extent,
                       free_on_no_return=args.free_on_no_return or False, progress=args.progress)
     save_kw = {"mode": "scale"} if out.suffix.lower() in (".yaml", ".yml") else {}

@@ -31,9 +31,43 @@ def add_parser(sub):
                    help="override a YAML input's free_thresh when loading (nav2's map_saver writes 0.25, "
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
     p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
-    p.add_argument("--mode", default="scale", choices=["scale", "trinary"],
-                   help="map_server mode of a YAML output (scale keeps probabilities)")
+    p.add_argument("--mode", default=None, choices=["scale", "trinary"],
+                   help="map_server mode of a YAML output (default scale: keeps probabilities)")
+    p.add_argument("--force", action="store_true", help="allow OUT to replace IN (an in-place update)")
     return p
+
+
+def _check_options(args, hidden, link):
+    """Options that cannot work, refused before any work is done."""
+    import math
+
+    import numpy as np
+
+    from crfmap.checks import check_int, check_number
+    from crfmap.commands.outputs import check_output
+
+    if not str(args.output).lower().endswith((".yaml", ".yml")) and args.mode is not None:
+        raise InputError("--mode", f"applies to map_server YAML outputs only, not to {args.output}")
+    check_number("--tol", args.tol, low=0.0)
+    check_number("--damping", args.damping, low=0.0, high=1.0)
+    if args.damping == 1.0:
+        raise InputError("--damping", "must be below 1 (1 would never update a message)")
+    if args.margin is not None:
+        check_int("--margin", args.margin, low=0)
+    for flag, value in (("--free-thresh", args.free_thresh), ("--occupied-thresh", args.occupied_thresh)):
+        if value is not None:
+            check_number(flag, value, low=0.0, high=1.0)
+    if args.float32:  # every entry must survive float32, or the kernels would see inf or 0
+        info = np.finfo(np.float32)
+        for flag, table in (("--hidden", hidden), ("--link", link)):
+            values = np.asarray(table, np.float64)
+            positive = values[values > 0]
+            if positive.size and (positive.max() > info.max / 16 or positive.min() < info.tiny):
+                raise InputError(flag, f"entries {values.ravel().tolist()} do not fit float32 "
+                                       f"({info.tiny:.1e} .. {info.max / 16:.1e}); rescale the table or drop --float32")
+            if not math.isfinite(float(values.max())):
+                raise InputError(flag, "entries must be finite")
+    check_output([args.input], args.output, force=args.force)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,17 +75,14 @@ def run(args: argparse.Namespace) -> int:
 
     from crfmap.crf.lbp import infer
     from crfmap.io.grid_files import load_grid, save_grid
-    from crfmap.io.map_server import load_map
     from crfmap.crf.potentials import check_table
 
     if args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
     hidden = check_table(args.hidden, "--hidden")
     link = check_table(args.link, "--link")
-    if str(args.input).lower().endswith((".yaml", ".yml")):
-        grid = load_map(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh)
-    else:
-        grid = load_grid(args.input)
+    _check_options(args, hidden, link)
+    grid = load_grid(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh)
     region = None
     if args.margin is not None:
         from crfmap.crf.lbp import near_known
@@ -63,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     if region is not None:  # outside the region nothing was inferred: keep the input there
         beliefs = np.where(region, result.beliefs.probability, grid.probability)
         result.beliefs = result.beliefs.with_probability(beliefs)
-    save_kw = {"mode": args.mode} if str(args.output).lower().endswith((".yaml", ".yml")) else {}
+    save_kw = {"mode": args.mode or "scale"} if str(args.output).lower().endswith((".yaml", ".yml")) else {}
     save_grid(result.beliefs, args.output, **save_kw)
     print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, "
           f"{result.seconds:.3f} s -> {args.output}")

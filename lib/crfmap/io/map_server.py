@@ -30,6 +30,7 @@ from PIL import Image, UnidentifiedImageError
 from crfmap.io._yaml import finite_number, format_number, read_mapping
 from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
 from crfmap.io.atomic import atomic_path
+from crfmap.io.image_guard import check_map_image
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.io.npy_grid import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
@@ -147,6 +148,7 @@ def _read_pixels(image_path, context=""):
         raise InputError(source, f"is a folder, expected an image file{context}")
     if source.stat().st_size == 0:
         raise InputError(source, f"empty image file (0 bytes){context}")
+    check_map_image(source, context)  # size and kind from the header, before decoding (crfmap.io.image_guard)
     try:
         _check_pnm_header(source, source, context)
         with Image.open(source) as img:
