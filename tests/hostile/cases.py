@@ -245,7 +245,7 @@ _carmen_case("flaser-pose-1e300", pose=(1e300, 0.0, 0.0), text=None)
 _carmen_case("flaser-stamp-inf", stamp=float("inf"), text=None)
 _carmen_case("flaser-beam-count-varies", text=carmen_text(n=9) + carmen_text(n=7).split("\n", 2)[2])
 _carmen_case("flaser-count-huge", text="FLASER 99999999999999999999 1 2 3\n")
-_carmen_case("flaser-range-1e300", text=carmen_text(reading="1e300"))
+_carmen_case("flaser-one-pose-at-1e9", text=carmen_text() + carmen_text(pose=(1e9, 0.0, 0.0)).split("\n", 2)[2])
 _carmen_case("odom-inf", text=carmen_text().replace("ODOM 0.0", "ODOM inf", 1))
 
 

@@ -60,7 +60,7 @@ _build_opt("resolution-nan", "--resolution", "nan", names=["resolution"])
 _build_opt("resolution-1e-9", "--resolution", "1e-9", names=["resolution"])
 _build_opt("extent-inverted", "--extent", "1", "1", "0", "0", names=["extent"])
 _build_opt("extent-huge", "--extent", "-1e7", "-1e7", "1e7", "1e7", names=["extent", "resolution"])
-_build_opt("free-on-no-return-negative", "--free-on-no-return", "-1", names=["--free-on-no-return"])
+_build_opt("free-on-no-return-negative", "--free-on-no-return", "-1", names=["--free-on-no-return", "free_on_no_return"])
 _build_opt("scan-topic-with-carmen", "--scan-topic", "/scan", names=["--scan-topic"])
 _build_opt("pose-source-tf-with-carmen", "--pose-source", "tf", names=["--pose-source"])
 
@@ -190,13 +190,13 @@ for _fault in ("enospc", "eacces", "erofs"):
 
 @case("faults", "efbig-npy", fault="fsize", subprocess=True)
 def _(d):
-    np.save(Path(d) / "big.npy", np.full((300, 300), 0.5))
+    np.save(Path(d) / "big.npy", np.full((1100, 1100), 0.5))  # 9.7 MB out
     return cli("infer", Path(d) / "big.npy", Path(d) / "out.npy", "--max-iter", "1", names=["out.npy"])
 
 
 @case("faults", "efbig-ros2-bag", fault="fsize", subprocess=True)
 def _(d):
-    return cli("convert", carmen_log(d, n_scans=300, n=180), Path(d) / "out", names=["out"])
+    return cli("convert", carmen_log(d, n_scans=6000, n=180), Path(d) / "out", names=["out"])
 
 
 @case("faults", "efbig-simulate", fault="fsize", subprocess=True)
@@ -219,8 +219,12 @@ for _sig in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT):
 
 
 # --- library calls with wrong types ---------------------------------------------------------------
-def _lib(name, call, names):
-    CASES.append(Case("library", name, lambda d: dict(call=lambda: call(d), names=names)))
+def _lib(name, call, names, prep=None):
+    """A library call; ``prep(d)`` writes its input files first (before the folder's snapshot)."""
+    def setup(d):
+        made = prep(d) if prep else None
+        return dict(call=lambda: call(d) if prep is None else call(d, made), names=names)
+    CASES.append(Case("library", name, setup))
 
 
 def _imp(module, attr):
@@ -236,11 +240,11 @@ _lib("save_grid-array", lambda d: _imp("crfmap.io.grid_files", "save_grid")(np.z
 _lib("save_grid-map-array", lambda d: _imp("crfmap.io.grid_files", "save_grid")(np.zeros((2, 2)), Path(d) / "o.yaml"),
      ["o.yaml"])
 _lib("read_carmen-None", lambda d: _imp("crfmap.io.carmen", "read_carmen")(None), ["None"])
-_lib("read_carmen-no_return-list", lambda d: _imp("crfmap.io.carmen", "read_carmen")(carmen_log(d), no_return=[1]),
-     ["no_return", "max_range"])
+_lib("read_carmen-no_return-list", lambda d, log: _imp("crfmap.io.carmen", "read_carmen")(log, no_return=[1]),
+     ["no_return", "max_range"], prep=carmen_log)
 _lib("read_bag-int", lambda d: _imp("crfmap.io.bag_reader", "read_bag")(42), ["42"])
-_lib("read_bag-laser_mount-text", lambda d: _imp("crfmap.io.bag_reader", "read_bag")(good_bag(d), laser_mount="abc"),
-     ["laser_mount"])
+_lib("read_bag-laser_mount-text", lambda d, bag: _imp("crfmap.io.bag_reader", "read_bag")(bag, laser_mount="abc"),
+     ["laser_mount"], prep=good_bag)
 _lib("write_bag-not-a-recording", lambda d: _imp("crfmap.io.bag_reader", "write_bag")("rec", Path(d) / "b"), ["b"])
 _lib("load_npy-list", lambda d: _imp("crfmap.io.npy_grid", "load_npy")([1, 2]), ["[1, 2]"])
 _lib("read_map_yaml-None", lambda d: _imp("crfmap.io.map_server", "read_map_yaml")(None), ["None"])

@@ -96,7 +96,9 @@ def tf_bag(d, quaternion, name="tfbag", fmt="ros2"):
     """A bag whose /tf odom -> base_link uses ``quaternion`` (x, y, z, w) and a scan in base_link."""
     from rosbags.typesys import Stores, get_typestore
 
-    store = get_typestore(Stores.ROS2_HUMBLE if fmt == "ros2" else Stores.ROS1_NOETIC)
+    from crfmap.io.bag_reader import typestore
+
+    store = typestore(fmt)
     T = store.types
     path = Path(d) / (name + (".bag" if fmt == "ros1" else ""))
     if fmt == "ros2":
@@ -109,7 +111,7 @@ def tf_bag(d, quaternion, name="tfbag", fmt="ros2"):
         ser = store.serialize_ros1
 
     def tmsg(name):
-        return name if fmt == "ros2" else name.replace("/msg/", "/")
+        return name if fmt == "ros2" or "tf2" not in name else "tf2_msgs/msg/TFMessage"
 
     def header(t, frame):
         stamp = T["builtin_interfaces/msg/Time"](sec=int(t), nanosec=int(round(t % 1 * 1e9)))

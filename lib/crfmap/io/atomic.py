@@ -10,6 +10,7 @@ files as one unit (an ``.npy`` array and its sidecar): a reader that takes
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import os
 import shutil
@@ -52,6 +53,20 @@ def signals_raise():
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def _named(exc, path):
+    """A write failure as an OSError naming ``path`` (a failed write(2) or a storage library names no file)."""
+    import sqlite3
+
+    if isinstance(exc, OSError) and exc.filename is None:
+        if exc.errno is None:  # numpy's short write: "N requested and M written"
+            return OSError(errno.EIO, f"write failed, nothing was written ({exc}: disk full or file-size limit?)",
+                           str(path))
+        return OSError(exc.errno, exc.strerror or str(exc), str(path))
+    if isinstance(exc, sqlite3.Error):  # rosbags' ROS 2 storage: e.g. "disk I/O error" on a full disk
+        return OSError(errno.EIO, f"cannot write ({exc})", str(path))
+    return None
 
 
 def _check_target(path: Path):
@@ -102,10 +117,13 @@ def atomic_paths(*paths):
             with unit_lock(paths[0].parent, exclusive=True):
                 for tmp, path in zip(tmps, paths):
                     os.replace(tmp, path)
-        except BaseException:
+        except BaseException as exc:
             for tmp in tmps:
                 with contextlib.suppress(FileNotFoundError):
                     os.remove(tmp)
+            named = _named(exc, paths[0])
+            if named is not None:
+                raise named from None
             raise
 
 
@@ -154,6 +172,9 @@ def atomic_dir(path):
                     shutil.rmtree(old, ignore_errors=True)
             else:
                 os.replace(tmp, path)
-        except BaseException:
+        except BaseException as exc:
             shutil.rmtree(tmp, ignore_errors=True)
+            named = _named(exc, path)
+            if named is not None:
+                raise named from None
             raise

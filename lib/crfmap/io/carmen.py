@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from crfmap.checks import check_input_file, check_path_arg
+from crfmap.checks import MAX_EXTENT_M, check_input_file, check_path_arg
 from crfmap.errors import InputError
 from crfmap.recording import Recording, ScanSet, Trajectory
 
@@ -233,6 +233,11 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
     bad_pose = ~np.all(np.isfinite(poses), axis=1)
     if bad_pose.any():
         raise InputError(path, f"line {laser_lines[int(np.argmax(bad_pose))]}: FLASER pose is not finite")
+    far = np.abs(poses[:, :2]).max(axis=1) > MAX_EXTENT_M
+    if far.any():
+        row = int(np.argmax(far))
+        raise InputError(path, f"line {laser_lines[row]}: FLASER pose ({poses[row, 0]:g}, {poses[row, 1]:g}) lies "
+                               f"beyond {MAX_EXTENT_M:g} m: a corrupt field?")
     bad_stamp = ~np.isfinite(stamps) | (np.abs(stamps) > 1e11)  # 1e11 s: year 5138; beyond is a corrupt field
     if bad_stamp.any():
         raise InputError(path, f"line {laser_lines[int(np.argmax(bad_stamp))]}: FLASER timestamp "

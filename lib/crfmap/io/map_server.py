@@ -31,6 +31,7 @@ from crfmap.io._yaml import finite_number, format_number, read_mapping
 from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
 from crfmap.io.atomic import atomic_path
 from crfmap.io.image_guard import check_map_image
+from crfmap.checks import check_path_arg
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.io.npy_grid import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
@@ -80,7 +81,7 @@ def read_map_yaml(yaml_path) -> dict:
     >>> read_map_yaml("map.yaml")["resolution"]  # doctest: +SKIP
     0.05
     """
-    path = Path(yaml_path)
+    path = check_path_arg(yaml_path, "map YAML file name")
     doc = read_mapping(path, "map YAML file")
     for key in _REQUIRED_KEYS:
         if key not in doc:
