@@ -153,6 +153,14 @@ def _(d):
     return cli("infer", src, Path(d) / "out.yaml", names=["out.png", "out.yaml"])
 
 
+@case("output", "infer-map-yaml-is-folder-beside-an-image")
+def _(d):
+    src = good_npy(d)
+    (Path(d) / "out.png").write_bytes(b"the user's old image")
+    (Path(d) / "out.yaml").mkdir()
+    return cli("infer", src, Path(d) / "out.yaml", names=["out.yaml"])
+
+
 @case("output", "infer-output-to-proc")
 def _(d):
     return cli("infer", good_npy(d), "/proc/self/out.npy", names=["/proc/self"])

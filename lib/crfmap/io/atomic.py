@@ -156,25 +156,25 @@ def atomic_dir(path):
         raise FileExistsError(17, "exists and is not a ROS 2 bag folder (or empty); not replacing it", str(path))
     with signals_raise():
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent))
-        tmp.rmdir()  # writers such as rosbags' refuse an existing folder
+        # The folder is written as <hidden temporary>/<final name>: writers name their files after
+        # the folder (rosbags: name.db3), so the bag holds the same names as a direct write would.
+        box = Path(tempfile.mkdtemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent))
+        tmp = box / path.name
         try:
             yield tmp
             if path.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{path.name[:200]}.", suffix=".old", dir=path.parent))
-                os.replace(path, old / "bag")  # move aside first: a failed rename then leaves the old bag
+                os.replace(path, box / ".old")  # moved aside first: a failed rename then puts it back
                 try:
                     os.replace(tmp, path)
                 except BaseException:
-                    os.replace(old / "bag", path)
+                    os.replace(box / ".old", path)
                     raise
-                finally:
-                    shutil.rmtree(old, ignore_errors=True)
             else:
                 os.replace(tmp, path)
         except BaseException as exc:
-            shutil.rmtree(tmp, ignore_errors=True)
             named = _named(exc, path)
             if named is not None:
                 raise named from None
             raise
+        finally:
+            shutil.rmtree(box, ignore_errors=True)

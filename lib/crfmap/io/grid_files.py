@@ -48,6 +48,9 @@ def save_grid(grid: OccupancyGrid, path, **options):
     if not isinstance(grid, OccupancyGrid):
         raise InputError(path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
     if path.suffix.lower() in MAP_SUFFIXES:
+        for target in (path, path.with_suffix(".pgm"), path.with_suffix(".png")):
+            if target.is_dir():  # refuse before writing anything: never half a map replaced
+                raise InputError(target, "is a folder; a map_server map writes a YAML file and an image there")
         return save_map(grid, path, **options)
     if path.suffix.lower() == ".npy":
         if options:
