@@ -65,10 +65,21 @@ def _input_name(args) -> str:
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = os.environ.get("CRFMAP_MAX_CELLS")
     if args.max_cells is not None:
         if not args.max_cells >= 1:
             parser.error(f"--max-cells must be at least 1, got {args.max_cells:g}")
         os.environ["CRFMAP_MAX_CELLS"] = str(int(args.max_cells))
+    try:
+        return _run(args)
+    finally:  # main() may be called in-process (tests, notebooks): leave the environment as it was
+        if previous is None:
+            os.environ.pop("CRFMAP_MAX_CELLS", None)
+        else:
+            os.environ["CRFMAP_MAX_CELLS"] = previous
+
+
+def _run(args) -> int:
     from crfmap.io.atomic import Interrupted, signals_raise
 
     prefix = f"crfmap {args.command}"

@@ -267,6 +267,12 @@ def _(d):
     return cli("build", Path(d) / "bomb.log.gz", Path(d) / "out.npy", names=["bomb.log.gz"])
 
 
+@case("carmen", "gzip-bomb-of-text-300MB")
+def _(d):
+    gzip_bomb(Path(d) / "tbomb.log.gz", expanded_mb=300, text=True)
+    return cli("build", Path(d) / "tbomb.log.gz", Path(d) / "out.npy", names=["tbomb.log.gz"])
+
+
 @case("carmen", "log-fifo")
 def _(d):
     return cli("build", fifo(Path(d) / "p.log"), Path(d) / "out.npy", names=["p.log"])

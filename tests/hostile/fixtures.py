@@ -65,9 +65,10 @@ def carmen_log(d, text=None, name="log.log", **kw):
     return path
 
 
-def gzip_bomb(path, expanded_mb=700):
+def gzip_bomb(path, expanded_mb=700, text=False):
     """A gzip file a few hundred kB long that expands to ``expanded_mb`` MB (concatenated members)."""
-    member = gzip.compress(b"\0" * (10 << 20), compresslevel=9)
+    member = gzip.compress((b"# no FLASER here\n" * (10 << 16))[: 10 << 20] if text else b"\0" * (10 << 20),
+                           compresslevel=9)
     with open(path, "wb") as f:
         for _ in range(expanded_mb // 10):
             f.write(member)

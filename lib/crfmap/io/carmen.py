@@ -44,7 +44,8 @@ SICK_NO_RETURN = 80.0  # [m] a SICK LMS 2xx measures at most 80 m; readings beyo
 SPIKE_MIN_COUNT = 10  # readings exactly at the file's maximum before it may be a no-return code ...
 SPIKE_RATIO = 3.0  # ... and this many times more than in the SPIKE_BAND below it
 SPIKE_BAND = 0.5  # [m]
-MAX_LOG_BYTES = 1 << 30  # [bytes] of (decompressed) log text: Intel's is 6 MB; more is a gzip bomb or not a log
+MAX_LOG_BYTES = 256 << 20  # [bytes] of (decompressed) log text: Intel's is 6 MB; more is a gzip bomb or not a log
+_CHUNK = 8 << 20  # [bytes] read at a time, so that binary content is refused early
 MAX_BEAMS = 100_000  # readings per FLASER line
 FLASER_FIXED_FIELDS = 9  # after the ranges: x y theta odom_x odom_y odom_theta ipc_ts hostname logger_ts
 ODOM_FIELDS = 9  # x y theta tv rv accel ipc_ts hostname logger_ts
@@ -56,14 +57,20 @@ def _read_text(path: Path) -> str:
         raise InputError(path, f"larger than {MAX_LOG_BYTES >> 20} MB: not a CARMEN log crfmap reads")
     with open(path, "rb") as f:
         gzipped = f.read(2) == b"\x1f\x8b"
+    chunks, size = [], 0
     try:
         with (gzip.open(path, "rb") if gzipped else open(path, "rb")) as f:
-            raw = f.read(MAX_LOG_BYTES + 1)  # decompress at most this much: a gzip bomb stops here
+            while chunk := f.read(_CHUNK):  # decompress at most MAX_LOG_BYTES: a gzip bomb stops there
+                if b"\0" in chunk:
+                    raise InputError(path, f"not a text CARMEN log (a NUL byte at byte {size + chunk.index(0)})")
+                chunks.append(chunk)
+                size += len(chunk)
+                if size > MAX_LOG_BYTES:
+                    raise InputError(path, f"expands to more than {MAX_LOG_BYTES >> 20} MB of text (a gzip "
+                                           "bomb?): not a CARMEN log crfmap reads")
     except (OSError, EOFError, zlib.error) as exc:
         raise InputError(path, f"corrupt gzip data ({exc})") from None
-    if len(raw) > MAX_LOG_BYTES:
-        raise InputError(path, f"expands to more than {MAX_LOG_BYTES >> 20} MB of text (a gzip bomb?): "
-                               "not a CARMEN log crfmap reads")
+    raw = b"".join(chunks)
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:
