@@ -86,6 +86,8 @@ def run_inprocess(case, spec, d):
 
 def _child_limits(fsize):
     def apply():
+        # A background job inherits SIGINT ignored (and Python then keeps it ignored): a user's Ctrl-C reaches it.
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
         resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
         if fsize:
             resource.setrlimit(resource.RLIMIT_FSIZE, (FSIZE_LIMIT, FSIZE_LIMIT))
