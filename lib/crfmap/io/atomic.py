@@ -86,7 +86,10 @@ def unit_lock(folder, exclusive):
         yield  # a folder we cannot open: no lock (nothing can be written there either)
         return
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        except OSError:
+            pass  # a file system without locks (some network mounts): write/read unlocked, as before
         yield
     finally:
         os.close(fd)  # closing releases the lock
