@@ -4,6 +4,7 @@ An occupancy grid becomes a CRF (a hidden 4-connected lattice of binary cells pl
 observed layer holding the grid's P(occupied)); loopy belief propagation infers each
 cell's occupancy from its neighbours; the potentials can be learned.
 """
+from crfmap import _numba_cache  # noqa: F401  (first: a read-only install caches kernels in a user folder)
 from crfmap.errors import CrfmapError, InputError, DataMissingError
 from crfmap.grid import OccupancyGrid, UNKNOWN
 

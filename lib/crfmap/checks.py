@@ -86,3 +86,108 @@ def check_pair(observed, truth, grids_only=False) -> tuple:
     if arrays[0].shape != arrays[1].shape:
         raise InputError("truth", f"shape {arrays[1].shape} does not match the observed grid's {arrays[0].shape}")
     return tuple(arrays)
+
+
+# --- limits on what an input may ask for (checked before allocating) ------------------------------
+MAX_CELLS_DEFAULT = 100_000_000  # a 10000 x 10000 grid; same bound as the grid builder's
+MAX_CELLS_ENV = "CRFMAP_MAX_CELLS"  # raise the bound: e.g. CRFMAP_MAX_CELLS=400000000 (or crfmap --max-cells)
+MAX_TEXT_BYTES = 1 << 20  # a map YAML, sidecar or bag metadata.yaml is a few hundred bytes
+
+
+def max_cells() -> int:
+    """The largest grid (in cells) an input may ask for: ``$CRFMAP_MAX_CELLS`` or 100 million.
+
+    >>> max_cells() >= 1
+    True
+    """
+    import os
+
+    text = os.environ.get(MAX_CELLS_ENV)
+    if not text:
+        return MAX_CELLS_DEFAULT
+    try:
+        value = int(float(text))
+    except ValueError:
+        raise InputError(MAX_CELLS_ENV, f"expected a number of cells, got {text!r}") from None
+    if value < 1:
+        raise InputError(MAX_CELLS_ENV, f"must be at least 1, got {text!r}")
+    return value
+
+
+def check_cells(source, width, height, what="grid") -> int:
+    """``width * height`` unless it exceeds :func:`max_cells` (InputError naming ``source``).
+
+    >>> check_cells("map.pgm", 20000, 20000)
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: map.pgm: a 20000 x 20000 grid (400,000,000 cells) exceeds the limit of 100,000,000 cells (raise it with crfmap --max-cells N or CRFMAP_MAX_CELLS)
+    """
+    cells = int(width) * int(height)
+    limit = max_cells()
+    if cells > limit:
+        raise InputError(source, f"a {int(width)} x {int(height)} {what} ({cells:,} cells) exceeds the limit of "
+                                 f"{limit:,} cells (raise it with crfmap --max-cells N or {MAX_CELLS_ENV})")
+    return cells
+
+
+def check_input_file(path, what, missing=None):
+    """``path`` as a Path if it is an existing regular file (a FIFO or device would hang a reader).
+
+    >>> check_input_file("/dev/null", "map YAML file")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: /dev/null: not a regular file (a device, FIFO or socket), expected map YAML file
+    """
+    import os
+    import stat
+    from pathlib import Path
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(repr(path), f"expected a file name ({what}), got {type(path).__name__}")
+    path = Path(path)
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        raise InputError(path, missing or f"{what} not found") from None
+    except OSError as exc:
+        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
+    if stat.S_ISDIR(mode):
+        raise InputError(path, f"is a folder, expected {what}")
+    if not stat.S_ISREG(mode):
+        raise InputError(path, f"not a regular file (a device, FIFO or socket), expected {what}")
+    return path
+
+
+def check_path_arg(path, what="file name"):
+    """``path`` as a Path; InputError for anything that is not a str or os.PathLike (None, numbers, lists).
+
+    >>> check_path_arg(None)
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: None: expected a file name, got NoneType
+    """
+    import os
+    from pathlib import Path
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(repr(path), f"expected a {what}, got {type(path).__name__}")
+    return Path(path)
+
+
+MAX_EXTENT_M = 1e8  # [m] no map reaches this far (the Earth is 4e7 m round): a unit mistake or a corrupt field
+
+
+def check_grid_geometry(source, resolution, origin, width, height):
+    """InputError naming ``source`` unless the grid's corners lie within :data:`MAX_EXTENT_M` metres.
+
+    >>> check_grid_geometry("map.yaml", 1e308, (0, 0, 0), 8, 6)
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: map.yaml: resolution 1e+308 m x 8 x 6 cells and origin (0, 0) reach beyond 1e+08 m: a unit mistake or a corrupt field?
+    """
+    span = float(resolution) * max(int(width), int(height))
+    reach = max(abs(float(origin[0])), abs(float(origin[1]))) + span
+    if not (math.isfinite(reach) and reach <= MAX_EXTENT_M):
+        raise InputError(source, f"resolution {float(resolution):g} m x {int(width)} x {int(height)} cells and origin "
+                                 f"({float(origin[0]):g}, {float(origin[1]):g}) reach beyond {MAX_EXTENT_M:g} m: "
+                                 "a unit mistake or a corrupt field?")

@@ -6,10 +6,13 @@ exit status 2; no traceback, no half-written output.
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import os
 import sys
+import warnings
 
-from crfmap.errors import CrfmapError
+from crfmap.errors import CrfmapError, one_line
 
 # Sub-command name -> module in crfmap.commands providing add_parser(subparsers) and run(args).
 COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench", "evaluate")
@@ -27,6 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="crfmap",
         description="Clean and complete occupancy grids with CRFs and loopy belief propagation.",
     )
+    parser.add_argument("--max-cells", type=float, default=None, metavar="N",
+                        help="largest grid an input may ask for, in cells (default 100 million; "
+                        "also $CRFMAP_MAX_CELLS)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS:
         try:
@@ -41,24 +47,69 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 
+def _os_error_line(exc: OSError) -> str:
+    """One line for a failed file operation: the file, then what went wrong."""
+    name = exc.filename if exc.filename is not None else ""
+    what = exc.strerror or str(exc)
+    if exc.errno == errno.ENOSPC:
+        what = "no space left on the device (nothing was written)"
+    elif exc.errno == errno.EFBIG:
+        what = "file too large for the file-size limit (nothing was written)"
+    return f"{name}: {what}" if name else what
+
+
+def _input_name(args) -> str:
+    return str(getattr(args, "input", None) or getattr(args, "prediction", None) or getattr(args, "scene", ""))
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = os.environ.get("CRFMAP_MAX_CELLS")
+    if args.max_cells is not None:
+        if not args.max_cells >= 1:
+            parser.error(f"--max-cells must be at least 1, got {args.max_cells:g}")
+        os.environ["CRFMAP_MAX_CELLS"] = str(int(args.max_cells))
     try:
-        status = args._run(args)
-    except CrfmapError as exc:
-        print(f"crfmap {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except FileNotFoundError as exc:
-        print(f"crfmap {args.command}: error: {exc.filename}: no such file", file=sys.stderr)
-        return 2
-    except (IsADirectoryError, PermissionError) as exc:
-        print(f"crfmap {args.command}: error: {exc.filename}: {exc.strerror}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"crfmap {args.command}: interrupted", file=sys.stderr)
-        return 130
+        return _run(args)
+    finally:  # main() may be called in-process (tests, notebooks): leave the environment as it was
+        if previous is None:
+            os.environ.pop("CRFMAP_MAX_CELLS", None)
+        else:
+            os.environ["CRFMAP_MAX_CELLS"] = previous
+
+
+def _run(args) -> int:
+    from crfmap.io.atomic import Interrupted, signals_raise
+
+    prefix = f"crfmap {args.command}"
+    # Warnings wait until the run succeeds: a failed run prints its one error line and nothing else.
+    with warnings.catch_warnings(record=True) as caught, signals_raise():
+        warnings.simplefilter("default")
+        try:
+            status = args._run(args)
+        except CrfmapError as exc:
+            return _fail(f"{prefix}: error: {exc}")
+        except Interrupted as exc:
+            return _fail(f"{prefix}: {exc}; nothing was written", 128 + exc.signum)
+        except KeyboardInterrupt:
+            return _fail(f"{prefix}: interrupted; nothing was written", 130)
+        except FileNotFoundError as exc:
+            return _fail(f"{prefix}: error: {exc.filename}: no such file or folder")
+        except OSError as exc:
+            return _fail(f"{prefix}: error: {_os_error_line(exc)}")
+        except RecursionError:
+            return _fail(f"{prefix}: error: {_input_name(args)}: input nested too deeply")
+        except MemoryError:
+            return _fail(f"{prefix}: error: {_input_name(args)}: out of memory (a smaller input or --max-cells?)")
+    for w in caught:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     return int(status or 0)
+
+
+def _fail(line, status=2) -> int:
+    print(one_line(line, limit=1000), file=sys.stderr)
+    return status
 
 
 if __name__ == "__main__":

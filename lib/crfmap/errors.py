@@ -5,6 +5,19 @@ with it, so that the command line can print it as one line and exit with 2.
 """
 
 
+MAX_MESSAGE = 400  # characters of one part of an error line (a hostile input can hold megabytes)
+
+
+def one_line(text, limit=MAX_MESSAGE) -> str:
+    r"""``text`` as one line of at most ``limit`` characters (newlines become spaces).
+
+    >>> one_line("bad\nheader " + "x" * 500)[:20], len(one_line("x" * 500))
+    ('bad header xxxxxxxxx', 400)
+    """
+    text = " ".join(str(text).split("\n")).replace("\r", " ")
+    return text if len(text) <= limit else text[: limit - 5] + "[...]"
+
+
 class CrfmapError(Exception):
     """Base class of the errors crfmap raises on purpose."""
 
@@ -16,8 +29,8 @@ class InputError(CrfmapError, ValueError):
     """
 
     def __init__(self, source, problem):
-        self.source = str(source)
-        self.problem = str(problem)
+        self.source = one_line(source)
+        self.problem = one_line(problem)
         super().__init__(f"{self.source}: {self.problem}")
 
 

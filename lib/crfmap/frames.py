@@ -96,9 +96,33 @@ def yaw_to_quaternion(yaw):
     return 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
 
 
-def quaternion_to_yaw(q):
-    """Yaw [rad] of a quaternion ``q`` with attributes x, y, z, w (e.g. a geometry_msgs/Quaternion)."""
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+QUATERNION_NORM_TOLERANCE = 0.01  # tf2 refuses |x²+y²+z²+w² - 1| above this (TF_DENORMALIZED_QUATERNION)
+
+
+def quaternion_to_yaw(q, source="quaternion"):
+    """Yaw [rad] of a quaternion ``q`` with attributes x, y, z, w (e.g. a geometry_msgs/Quaternion).
+
+    The rule for quaternions that are not of unit length is tf2's: a squared norm more than
+    :data:`QUATERNION_NORM_TOLERANCE` away from 1 (a zero, NaN or badly scaled quaternion)
+    is an error (InputError naming ``source``); one within it is normalised before use
+    (the yaw formula below is only right for unit quaternions).
+
+    >>> from types import SimpleNamespace as Q
+    >>> round(quaternion_to_yaw(Q(x=0.0, y=0.0, z=0.7071, w=0.7071)), 4)
+    1.5708
+    >>> quaternion_to_yaw(Q(x=0.0, y=0.0, z=0.0, w=0.0), "/tf odom -> base_link")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: /tf odom -> base_link: quaternion (0, 0, 0, 0) is not a rotation (squared norm 0; tf2 refuses more than 0.01 away from 1)
+    """
+    x, y, z, w = float(q.x), float(q.y), float(q.z), float(q.w)
+    norm2 = x * x + y * y + z * z + w * w
+    if not (math.isfinite(norm2) and abs(norm2 - 1.0) <= QUATERNION_NORM_TOLERANCE):
+        raise InputError(source, f"quaternion ({x:g}, {y:g}, {z:g}, {w:g}) is not a rotation (squared norm "
+                                 f"{norm2:g}; tf2 refuses more than {QUATERNION_NORM_TOLERANCE:g} away from 1)")
+    n = math.sqrt(norm2)
+    x, y, z, w = x / n, y / n, z / n, w / n
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 # --- the tf tree -----------------------------------------------------------------------------

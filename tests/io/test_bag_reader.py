@@ -282,6 +282,7 @@ def test_real_ros1_bag():
 
 # --- the `crfmap convert` command ------------------------------------------------------------
 CARMEN_LOG = """PARAM robot_frontlaser_offset 0.0 nohost 0
+PARAM robot_front_laser_max 9.0 nohost 0
 ODOM 0 0 0 0 0 0 0.5 host 0.5
 FLASER 5 1.0 1.1 9.0 1.2 1.3 0.0 0.0 0.0 0.0 0.0 0.0 1.0 host 1.0
 ODOM 0.1 0 0.1 0 0 0 1.5 host 1.5

@@ -16,6 +16,7 @@ ACES = "carmen/aces-corrected.log.gz"
 LOG = """# message formats defined: PARAM SYNC ODOM FLASER
 PARAM robot_frontlaser_offset 0.0 nohost 0
 PARAM laser_unit metres nohost 0
+PARAM robot_front_laser_max 30.0 nohost 0
 ODOM 0 0 0 0 0 0 0.5 pippo 0.5
 NEFF 15
 FLASER 5 1.0 2.5 30.0 0.75 30.0 1.0 2.0 0.5 1.0 2.0 0.5 1.25 pippo 1.26
@@ -36,7 +37,7 @@ def test_flaser_odom_param_parsed(log_file):
     rec = read_carmen(log_file)
     s = rec.scans
     assert s.ranges.dtype == np.float32 and s.ranges.shape == (2, 5)
-    # 30.0 is the largest value and repeated: the no-return code, reported as +inf (REP 117).
+    # 30.0 is the laser's maximum range (PARAM robot_front_laser_max): no return, +inf (REP 117).
     np.testing.assert_array_equal(s.ranges[0], np.float32([1.0, 2.5, np.inf, 0.75, np.inf]))
     np.testing.assert_array_equal(s.ranges[1], np.float32([np.inf, 2.0, 3.0, 4.0, 5.0]))
     assert s.range_max == 30.0 and rec.meta["no_return_code"] == 30.0 and rec.meta["no_return_readings"] == 3
@@ -52,7 +53,9 @@ def test_flaser_odom_param_parsed(log_file):
     np.testing.assert_array_equal(o.stamps, [0.5, 1.5])
     np.testing.assert_array_equal(o.poses, [[0, 0, 0], [0.1, 0.0, 0.05]])
     np.testing.assert_array_equal(o.twists, [[0, 0], [0.2, 0.1]])
-    assert rec.meta["params"] == {"robot_frontlaser_offset": "0.0", "laser_unit": "metres"}
+    assert rec.meta["max_range_source"] == "PARAM robot_front_laser_max"
+    assert rec.meta["params"] == {"robot_frontlaser_offset": "0.0", "laser_unit": "metres",
+                                  "robot_front_laser_max": "30.0"}
     assert rec.meta["skipped_messages"] == {"NEFF": 1}
 
 
@@ -68,14 +71,16 @@ def test_no_return_choices(log_file):
     kept = read_carmen(log_file, no_return=None)
     assert np.isfinite(kept.scans.ranges).all() and kept.scans.ranges.max() == 30.0
     five = read_carmen(log_file, no_return=5.0)
-    assert np.isposinf(five.scans.ranges[1, 4]) and five.scans.ranges[0, 2] == 30.0
+    # at or beyond the maximum range: no return (30.0 too, never a hit)
+    assert np.isposinf(five.scans.ranges[1, 4]) and np.isposinf(five.scans.ranges[0, 2])
+    assert five.scans.ranges[1, 3] == 4.0
     with pytest.raises(InputError, match="no_return"):
         read_carmen(log_file, no_return="max")
 
 
 def test_a_single_largest_reading_is_not_a_code(tmp_path):
     path = tmp_path / "once.log"
-    path.write_text(LOG.replace("30.0", "1.5"))  # no repeated maximum: 5.0 occurs once
+    path.write_text(LOG.replace("PARAM robot_front_laser_max 30.0 nohost 0\n", "").replace("30.0", "1.5"))  # 5.0 once
     rec = read_carmen(path)
     assert rec.meta["no_return_code"] is None and np.isfinite(rec.scans.ranges).all()
     assert rec.scans.range_max == 5.0
@@ -124,7 +129,7 @@ def test_missing_file_and_folder(tmp_path):
 
 @pytest.mark.skipif(not (paths.have_data(INTEL) and paths.have_data(ACES)), reason="CARMEN logs not downloaded")
 @pytest.mark.parametrize("name, n_scans, code, first_pose", [
-    (INTEL, 910, 81.83, (0.600266, -0.0320327, -0.354665)),
+    (INTEL, 910, 80.0, (0.600266, -0.0320327, -0.354665)),  # 81.83 m readings: beyond a SICK's 80 m
     (ACES, 440, 50.0, (0.89706, -0.180771, -0.454003)),
 ])
 def test_real_logs(name, n_scans, code, first_pose):

@@ -16,16 +16,22 @@ def is_carmen_log(path) -> bool:
     return str(path).lower().endswith(CARMEN_SUFFIXES)
 
 
-def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None):
+def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None):
     """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``.
 
     For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom'
     the raw ODOM track interpolated at the scan stamps ('tf' does not apply).
+    ``max_range`` [m] (CARMEN only): readings at or beyond it are no-returns (see
+    :func:`crfmap.io.carmen.read_carmen`).
     """
-    path = Path(path)
+    from crfmap.checks import check_path_arg
+
+    path = check_path_arg(path, "log or bag")
     if not is_carmen_log(path):
         from crfmap.io.bag_reader import read_bag
 
+        if max_range is not None:
+            raise InputError("--max-range", "applies to CARMEN logs only (a bag's LaserScan states its range_max)")
         return read_bag(path, scan_topic=scan_topic, pose_source=pose_source, laser_mount=laser_mount)
     from crfmap.io.carmen import read_carmen
 
@@ -33,7 +39,7 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None):
         raise InputError("--scan-topic", "applies to bags only, not to CARMEN logs")
     if laser_mount is not None:
         raise InputError("--laser-mount", "applies to bags only (CARMEN FLASER poses are laser poses)")
-    rec = read_carmen(path)
+    rec = read_carmen(path, max_range="auto" if max_range is None else max_range)
     rec.meta["pose_source"] = "truth"
     if pose_source == "tf":
         raise InputError("--pose-source", "a CARMEN log has no tf; use truth (corrected poses) or odom")
@@ -63,6 +69,9 @@ def add_bag_options(p):
     p.add_argument("--scan-topic", default=None, help="LaserScan topic of a bag (default: the only one, or /scan)")
     p.add_argument("--laser-mount", type=float, nargs=3, default=None, metavar=("X", "Y", "YAW"),
                    help="the laser's pose on base_link [m, m, rad], overriding /tf_static")
+    p.add_argument("--max-range", type=float, default=None, metavar="M",
+                   help="CARMEN logs: the laser's maximum range; readings at or beyond it are no-returns "
+                        "(default: the log's PARAM robot_front_laser_max, else see crfmap.io.carmen)")
 
 
 def add_ros2_bag_options(p):
@@ -87,7 +96,7 @@ def ros2_bag_kwargs(args, fmt):
 
 def add_map_output_options(p):
     """How a map_server YAML output is written, and which nav2 loader judges it (shared with ``infer``)."""
-    p.add_argument("--mode", default="trinary", choices=["trinary", "scale", "raw"],
+    p.add_argument("--mode", default=None, choices=["trinary", "scale", "raw"],
                    help="map_server mode of a YAML output. trinary (default): what nav2's map_saver writes, "
                    "P >= 0.65 occupied, P <= 0.2 free, else unknown; nav2 and ROS 1 navigate on it. scale: "
                    "keeps P to a percent with thresholds 1/0, NOT for navigation (nav2 sees almost no "
@@ -110,6 +119,7 @@ def save_map_output(grid, out, args) -> str:
     from crfmap.io.grid_files import save_grid
 
     if str(out).lower().endswith((".yaml", ".yml")):
+        args.mode = args.mode or "trinary"
         from crfmap.io.map_server import load_map
         from crfmap.io.nav2_costmap import describe_for_nav2
 
@@ -123,6 +133,8 @@ def save_map_output(grid, out, args) -> str:
         seen = load_map(out, loader=args.loader).to_int8()
         return f"{describe_for_nav2(seen)} ({args.loader} loader; P >= 0.65 in the grid: " \
                f"{int((grid.probability >= 0.65).sum())})"
+    if getattr(args, "mode", None) is not None:
+        raise InputError("--mode", f"applies to map_server YAML outputs only, not to {out}")
     for flag in ("save_occupied_thresh", "save_free_thresh"):
         if getattr(args, flag, None) is not None:
             raise InputError("--" + flag.replace("_", "-"), "applies to map_server YAML outputs only, not .npy")
@@ -151,6 +163,7 @@ def add_parser(sub):
                    help="area to map in metres (default: the data's bounding box)")
     p.add_argument("--progress", action="store_true", help="show a progress bar")
     add_map_output_options(p)
+    p.add_argument("--force", action="store_true", help="allow OUT_MAP to replace INPUT")
     return p
 
 
@@ -160,9 +173,12 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if not str(out).lower().endswith(GRID_SUFFIXES):
         raise InputError(out, "the map must end in .yaml/.yml (map_server) or .npy")
+    from crfmap.commands.outputs import check_output
+
+    check_output([args.input], out, force=args.force)
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
-                         laser_mount=args.laser_mount)
+                         laser_mount=args.laser_mount, max_range=args.max_range)
     grid = build_grid(rec.scans, args.resolution, model=args.model, bounds=args.bounds,
                       free_on_no_return=args.free_on_no_return or False, progress=args.progress)
     nav2_view = save_map_output(grid, out, args)

@@ -37,9 +37,12 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(out, "a ROS2 bag is a folder; drop the .bag suffix or use --format ros1")
     if Path(args.input).resolve() == out.resolve():
         raise InputError(out, "the output would replace the input")
+    from crfmap.commands.outputs import check_output_folder
+
+    check_output_folder(out)
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
-                         laser_mount=args.laser_mount)
+                         laser_mount=args.laser_mount, max_range=args.max_range)
     write_bag(rec, out, fmt=fmt, **ros2_bag_kwargs(args, fmt))
     n_odom = len(rec.odometry) if rec.odometry is not None else 0
     print(f"{args.input}: {len(rec.scans)} scans, {n_odom} odometry poses -> {fmt} bag {out} "

@@ -40,7 +40,41 @@ def add_parser(sub):
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
     p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
     add_map_output_options(p)  # --mode, --save-occupied-thresh, --save-free-thresh, --loader
+    p.add_argument("--force", action="store_true", help="allow OUT to replace IN (an in-place update)")
     return p
+
+
+def _check_options(args, hidden, link):
+    """Options that cannot work, refused before any work is done."""
+    import math
+
+    import numpy as np
+
+    from crfmap.checks import check_int, check_number
+    from crfmap.commands.outputs import check_output
+
+    if not str(args.output).lower().endswith((".yaml", ".yml")) and args.mode is not None:
+        raise InputError("--mode", f"applies to map_server YAML outputs only, not to {args.output}")
+    check_number("--tol", args.tol, low=0.0)
+    check_number("--damping", args.damping, low=0.0, high=1.0)
+    if args.damping == 1.0:
+        raise InputError("--damping", "must be below 1 (1 would never update a message)")
+    if args.margin is not None:
+        check_int("--margin", args.margin, low=0)
+    for flag, value in (("--free-thresh", args.free_thresh), ("--occupied-thresh", args.occupied_thresh)):
+        if value is not None:
+            check_number(flag, value, low=0.0, high=1.0)
+    if args.float32:  # every entry must survive float32, or the kernels would see inf or 0
+        info = np.finfo(np.float32)
+        for flag, table in (("--hidden", hidden), ("--link", link)):
+            values = np.asarray(table, np.float64)
+            positive = values[values > 0]
+            if positive.size and (positive.max() > info.max / 16 or positive.min() < info.tiny):
+                raise InputError(flag, f"entries {values.ravel().tolist()} do not fit float32 "
+                                       f"({info.tiny:.1e} .. {info.max / 16:.1e}); rescale the table or drop --float32")
+            if not math.isfinite(float(values.max())):
+                raise InputError(flag, "entries must be finite")
+    check_output([args.input], args.output, force=args.force)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,19 +82,16 @@ def run(args: argparse.Namespace) -> int:
 
     from crfmap.crf.lbp import infer
     from crfmap.io.grid_files import load_grid
-    from crfmap.io.map_server import load_map
     from crfmap.crf.potentials import check_table
 
     if args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
     hidden = check_table(args.hidden or "10,1,1,10", "--hidden")
     link = check_table(args.link or "1,0,0,1", "--link")
+    _check_options(args, hidden, link)
     scaled = args.preset == "certainty" and args.hidden is None and args.link is None
-    if str(args.input).lower().endswith((".yaml", ".yml")):
-        grid = load_map(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh,
-                        loader=args.loader)
-    else:
-        grid = load_grid(args.input)
+    grid = load_grid(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh,
+                     loader=args.loader)
     region = None
     if scaled:  # the certainty preset: per-cell link strengths from P, near observations only
         from dataclasses import replace

@@ -21,8 +21,15 @@ def run(args: argparse.Namespace) -> int:
     from crfmap.io.grid_files import load_grid
     from crfmap.assess.metrics import evaluate
 
+    import numpy as np
+
     pred = load_grid(args.prediction)
     truth = load_grid(args.truth)
+    values = truth.probability
+    if not np.all((values == 0) | (values == 1) | (values == 0.5)):
+        odd = values[(values != 0) & (values != 1) & (values != 0.5)]
+        raise InputError(args.truth, f"a truth holds 0 (empty), 1 (occupied) or 0.5 (unknown) only; "
+                                     f"{odd.size} cells hold other values (e.g. {float(odd[0]):g})")
     if pred.shape != truth.shape:
         raise InputError(args.prediction, f"shape {pred.shape} does not match {args.truth}'s {truth.shape}")
     r = evaluate(pred, truth)

@@ -63,8 +63,33 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
+MAX_BEAMS = 100_000  # beams per scan; real scanners have a few thousand
+
+
+def check_options(args):
+    """Refuse options no laser or robot can have, before any work (InputError naming the option)."""
+    from crfmap.checks import check_int, check_number
+
+    check_int("--beams", args.beams, low=1, high=MAX_BEAMS)
+    check_number("--fov", args.fov, low=0.0, low_open=True, high=360.0)
+    check_number("--range", args.range_max, low=0.0, low_open=True, high=1e4)
+    check_number("--range-min", args.range_min, low=0.0)
+    if args.range_min >= args.range_max:
+        raise InputError("--range-min", f"must be below --range ({args.range_max:g} m), got {args.range_min:g}")
+    for flag, value in (("--range-noise", args.range_noise), ("--range-sigma", args.range_sigma),
+                        ("--odom-noise", args.odom_noise), ("--odom-yaw-noise", args.odom_yaw_noise)):
+        check_number(flag, value, low=0.0)
+    check_int("--stride", args.stride, low=1)
+    check_int("--seed", args.seed, low=0)
+    if args.scene_seed is not None:
+        check_int("--scene-seed", args.scene_seed, low=0)
+    if args.resolution is not None:
+        check_number("--resolution", args.resolution, low=0.001, high=10.0)
+
+
 def build_recording(args):
     """The simulated :class:`~crfmap.recording.Recording` the command would write (no file touched)."""
+    check_options(args)
     from crfmap.world.scenes import make_scene
     from crfmap.sim.drives import Explore
     from crfmap.sim.simulator import LEGACY_NO_RETURN, Laser, simulate
@@ -105,8 +130,12 @@ def run(args) -> int:
 
     out = Path(args.out)
     bag_kwargs = ros2_bag_kwargs(args, args.format)
-    if out.exists() and not args.overwrite:
+    if (out.exists() or out.is_symlink()) and not args.overwrite:
         raise InputError(out, "already exists; pass --overwrite to replace it")
+    from crfmap.commands.outputs import check_output_folder
+
+    check_output_folder(out)  # --overwrite replaces a bag, never a folder of other files
+    check_options(args)
     started = time.perf_counter()
     recording = build_recording(args)
     from crfmap.io.bag_reader import write_bag

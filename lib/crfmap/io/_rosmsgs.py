@@ -7,6 +7,8 @@ Private to the package: :mod:`crfmap.io.bag_reader` and :mod:`crfmap.io.bag_writ
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from crfmap.errors import InputError
@@ -28,11 +30,15 @@ TRUTH_TOPIC, MAP_TOPIC = "/ground_truth_pose", "/map"
 
 
 # --- values out of messages ---------------------------------------------------------------
-def pose_of(msg_pose):
-    """(x, y, yaw) of a geometry_msgs Pose or Transform."""
+def pose_of(msg_pose, source="pose"):
+    """(x, y, yaw) of a geometry_msgs Pose or Transform; InputError naming ``source`` for a non-finite
+    position or a quaternion that is not a rotation (see :func:`crfmap.frames.quaternion_to_yaw`)."""
     p = getattr(msg_pose, "position", None) or getattr(msg_pose, "translation")
     q = getattr(msg_pose, "orientation", None) or getattr(msg_pose, "rotation")
-    return (float(p.x), float(p.y), quaternion_to_yaw(q))
+    x, y = float(p.x), float(p.y)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise InputError(source, f"position ({x:g}, {y:g}) is not finite")
+    return (x, y, quaternion_to_yaw(q, source))
 
 
 def to_ns(seconds) -> int:
@@ -56,7 +62,7 @@ def grid_from_message(msg, source, topic):
         from crfmap.io.map_server import grid_from_values  # 50 stays a known 50
 
         return grid_from_values(data.reshape(int(info.height), int(info.width)), resolution=resolution,
-                                origin=pose_of(info.origin), frame_id=msg.header.frame_id or "map")
+                                origin=pose_of(info.origin, f"{source}: {topic} origin"), frame_id=msg.header.frame_id or "map")
     except InputError as exc:
         raise InputError(source, f"{topic}: {exc.problem}") from None
 

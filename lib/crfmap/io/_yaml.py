@@ -14,18 +14,76 @@ from pathlib import Path
 
 import yaml
 
+from crfmap.checks import MAX_TEXT_BYTES, check_input_file
 from crfmap.errors import InputError
+
+MAX_DEPTH = 20  # nesting of lists/mappings; the files crfmap reads nest 2 deep
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """PyYAML's safe loader without aliases (``*a``: "billion laughs") and with a nesting limit.
+
+    The files crfmap reads (map YAML, sidecars, bag metadata) use neither; refusing them
+    keeps a small hostile file from taking minutes or gigabytes (or a RecursionError).
+    """
+
+    depth = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            raise yaml.YAMLError(f"YAML aliases (*{event.anchor}) are not accepted, at line {event.start_mark.line + 1}")
+        if self.check_event(yaml.SequenceStartEvent, yaml.MappingStartEvent):
+            self.depth += 1
+            if self.depth > MAX_DEPTH:
+                raise yaml.YAMLError(f"nested more than {MAX_DEPTH} levels deep, at line "
+                                     f"{self.peek_event().start_mark.line + 1}")
+            try:
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+        return super().compose_node(parent, index)
+
+
+def load_text(text, source):
+    """The YAML document in ``text`` (strict: no aliases, limited nesting); errors name ``source``."""
+    try:
+        loader = _StrictLoader(text)
+        try:
+            return loader.get_single_data()
+        finally:
+            loader.dispose()
+    except RecursionError:
+        raise InputError(source, "not valid YAML: nested too deeply") from None
+    except (ValueError, OverflowError) as exc:  # a constructor's complaint, e.g. an impossible date
+        raise InputError(source, f"not valid YAML: {exc}") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).replace("\n", " ")
+        raise InputError(source, f"not valid YAML{where}: {problem}") from None
+
+
+def read_text_file(path, what, limit=MAX_TEXT_BYTES):
+    """The UTF-8 text of a small regular file (a FIFO, device or huge file is refused)."""
+    path = check_input_file(path, what)
+    try:
+        size = path.stat().st_size
+        if size > limit:
+            raise InputError(path, f"{size:,} bytes is too large for {what} (at most {limit:,})")
+        with open(path, "rb") as f:
+            return f.read(limit + 1).decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(path, "not a text file (expected YAML)") from None
+    except OSError as exc:
+        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
 
 
 def read_mapping(path, what):
     """The YAML mapping in file ``path`` (``what`` it should hold goes into the errors)."""
-    path = Path(path)
-    if not path.exists():
-        raise InputError(path, f"{what} not found")
-    if path.is_dir():
-        raise InputError(path, f"is a folder, expected {what}")
+    path = check_input_file(path, what)
     try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+        doc = load_text(read_text_file(path, what), path)
     except UnicodeDecodeError:
         raise InputError(path, "not a text file (expected YAML)") from None
     except OSError as exc:
@@ -46,7 +104,7 @@ def finite_number(value, source, key):
         raise InputError(source, f"key '{key}' must be a number, got {value!r}")
     try:
         number = float(value)
-    except ValueError:
+    except (ValueError, OverflowError):
         raise InputError(source, f"key '{key}' must be a number, got {value!r}") from None
     if not math.isfinite(number):
         raise InputError(source, f"key '{key}' must be finite, got {value!r}")

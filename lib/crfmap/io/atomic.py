@@ -1,53 +1,189 @@
-"""Write files so that nothing is ever half-written: a temporary file, then a rename."""
+"""Write files so that nothing is ever half-written: a temporary file, then a rename.
+
+While a temporary file exists, SIGTERM and SIGHUP (like SIGINT, Ctrl-C) raise
+:class:`Interrupted` in the main thread, so the ``except`` clauses below remove the
+temporary before the process ends (the default action of those signals would kill it
+on the spot and leave ``.name.xxxx.tmp`` behind). :func:`atomic_paths` replaces several
+files as one unit (an ``.npy`` array and its sidecar): a reader that takes
+:func:`unit_lock` never sees the array of one write and the sidecar of another.
+"""
 from __future__ import annotations
 
 import contextlib
+import errno
+import fcntl
 import os
+import shutil
+import signal
 import tempfile
+import threading
 from pathlib import Path
+
+CAUGHT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+class Interrupted(KeyboardInterrupt):
+    """A termination signal arrived (``signum``); raised so that clean-up code runs."""
+
+    def __init__(self, signum):
+        self.signum = int(signum)
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+
+
+def _raise_interrupted(signum, frame):
+    raise Interrupted(signum)
 
 
 @contextlib.contextmanager
+def signals_raise():
+    """Inside the block, SIGTERM and SIGHUP raise :class:`Interrupted` (main thread; handlers set by others are kept).
+
+    >>> with signals_raise():
+    ...     pass
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {}
+    for sig in CAUGHT_SIGNALS:
+        if signal.getsignal(sig) in (signal.SIG_DFL, None):
+            previous[sig] = signal.signal(sig, _raise_interrupted)
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _named(exc, path):
+    """A write failure as an OSError naming ``path`` (a failed write(2) or a storage library names no file)."""
+    import sqlite3
+
+    if isinstance(exc, OSError) and exc.filename is None:
+        if exc.errno is None:  # numpy's short write: "N requested and M written"
+            return OSError(errno.EIO, f"write failed, nothing was written ({exc}: disk full or file-size limit?)",
+                           str(path))
+        return OSError(exc.errno, exc.strerror or str(exc), str(path))
+    if isinstance(exc, sqlite3.Error):  # rosbags' ROS 2 storage: e.g. "disk I/O error" on a full disk
+        return OSError(errno.EIO, f"cannot write ({exc})", str(path))
+    return None
+
+
+def _check_target(path: Path):
+    if path.is_dir() and not path.is_symlink():
+        raise IsADirectoryError(21, "is a folder, expected a file name", str(path))
+
+
+@contextlib.contextmanager
+def unit_lock(folder, exclusive):
+    """An advisory lock on ``folder`` (flock on the folder itself: no lock file is left behind).
+
+    Writers of a multi-file unit hold it exclusively while renaming; readers share it while reading.
+    """
+    try:
+        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
+        yield  # a folder we cannot open: no lock (nothing can be written there either)
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        except OSError:
+            pass  # a file system without locks (some network mounts): write/read unlocked, as before
+        yield
+    finally:
+        os.close(fd)  # closing releases the lock
+
+
+@contextlib.contextmanager
+def atomic_paths(*paths):
+    """Yield temporary paths beside ``paths``; on success rename all of them, as one unit.
+
+    On an exception (or SIGTERM/SIGHUP/SIGINT) every temporary file is removed and the
+    targets are left untouched. The renames happen under :func:`unit_lock` of the folder.
+
+    >>> with atomic_paths("grid.npy", "grid.npy.yaml") as (a, b):  # doctest: +SKIP
+    ...     a.write_bytes(b"..."); b.write_text("...")
+    """
+    paths = [Path(p) for p in paths]
+    for path in paths:
+        _check_target(path)
+    tmps = []
+    with signals_raise():
+        try:
+            for path in paths:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent)
+                os.close(fd)
+                tmps.append(Path(tmp))
+            yield tmps if len(paths) > 1 else tmps[0]
+            for tmp, path in zip(tmps, paths):
+                _set_new_file_mode(tmp, path)
+            with unit_lock(paths[0].parent, exclusive=True):
+                for tmp, path in zip(tmps, paths):
+                    os.replace(tmp, path)
+        except BaseException as exc:
+            for tmp in tmps:
+                with contextlib.suppress(FileNotFoundError):
+                    os.remove(tmp)
+            named = _named(exc, paths[0])
+            if named is not None:
+                raise named from None
+            raise
+
+
 def atomic_path(path):
     """Yield a temporary path beside ``path``; on success rename it onto ``path``.
 
-    On an exception the temporary file is removed and ``path`` is left untouched.
+    On an exception (or SIGTERM/SIGHUP/SIGINT) the temporary file is removed and ``path``
+    is left untouched.
 
     >>> with atomic_path("out.txt") as tmp:  # doctest: +SKIP
     ...     Path(tmp).write_text("done")
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        yield Path(tmp)
-        _set_new_file_mode(tmp, path)
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.remove(tmp)
-        raise
+    return atomic_paths(path)
+
+
+def is_bag_folder(path) -> bool:
+    """Whether folder ``path`` looks like a ROS 2 bag (it has a metadata.yaml)."""
+    return (Path(path) / "metadata.yaml").is_file()
 
 
 @contextlib.contextmanager
 def atomic_dir(path):
-    """Like :func:`atomic_path` for a folder (a ROS2 bag is a folder)."""
-    import shutil
+    """Like :func:`atomic_path` for a folder (a ROS2 bag is a folder).
 
+    An existing ``path`` is replaced only if it is empty or a ROS 2 bag: never a folder of
+    the user's other files.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
-    tmp.rmdir()  # writers such as rosbags' refuse an existing folder
-    try:
-        yield tmp
-        _set_new_file_mode(tmp, path, folder=True)
-        if path.exists():
-            shutil.rmtree(path)
-        os.replace(tmp, path)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    if path.exists() and not (path.is_dir() and (is_bag_folder(path) or not any(path.iterdir()))):
+        raise FileExistsError(17, "exists and is not a ROS 2 bag folder (or empty); not replacing it", str(path))
+    with signals_raise():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        # The folder is written as <hidden temporary>/<final name>: writers name their files after
+        # the folder (rosbags: name.db3), so the bag holds the same names as a direct write would.
+        box = Path(tempfile.mkdtemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent))
+        tmp = box / path.name
+        try:
+            yield tmp
+            _set_new_file_mode(tmp, path, folder=True)
+            if path.exists():
+                os.replace(path, box / ".old")  # moved aside first: a failed rename then puts it back
+                try:
+                    os.replace(tmp, path)
+                except BaseException:
+                    os.replace(box / ".old", path)
+                    raise
+            else:
+                os.replace(tmp, path)
+        except BaseException as exc:
+            named = _named(exc, path)
+            if named is not None:
+                raise named from None
+            raise
+        finally:
+            shutil.rmtree(box, ignore_errors=True)
 
 
 # --- permissions: what open()/mkdir() would give, not mkstemp's 0600 --------------------------

@@ -28,6 +28,7 @@ from crfmap.io._rosmsgs import (CMD_VEL_TOPIC, MAP_TOPIC, ODOM_TOPIC, SCAN_TOPIC
                        T_TWIST, TF_STATIC_TOPIC, TF_TOPIC, TF_TYPES, TRUTH_TOPIC, grid_from_message, pose_of,
                        to_seconds, typestore)
 from crfmap.io.bag_writer import write_bag  # noqa: F401  (bags in and out from one module, as before)
+from crfmap.checks import check_input_file, check_path_arg
 from crfmap.errors import InputError
 from crfmap.frames import TfTree, compose, interpolate_poses
 from crfmap.frames import inverse, wrap_angle  # noqa: F401  (re-exported: they predate crfmap.frames)
@@ -47,16 +48,35 @@ def _bag_location(path: Path):
     if path.is_dir():
         if not (path / "metadata.yaml").exists():
             raise InputError(path, "folder without metadata.yaml: not a ROS2 bag")
+        _check_metadata(path, path / "metadata.yaml")
         return path, "ros2"
     if path.suffix == ".bag":
+        check_input_file(path, "ROS1 bag file")  # a FIFO would block the reader
         return path, "ros1"
     if path.name == "metadata.yaml" or path.suffix in (".db3", ".mcap"):
         if (path.parent / "metadata.yaml").exists():
+            _check_metadata(path, path.parent / "metadata.yaml")
             return path.parent, "ros2"
         if path.suffix in (".db3", ".mcap"):  # a bare storage file: its own metadata is enough
             return path, "ros2"
         raise InputError(path, "no metadata.yaml beside it: not part of a ROS2 bag folder")
     raise InputError(path, "not a ROS bag (expected a ROS1 .bag file or a ROS2 bag folder)")
+
+
+def _check_metadata(path, metadata):
+    """Read a ROS2 bag's metadata.yaml strictly first (no aliases, bounded size and nesting), so that a
+    hostile one is refused in one line instead of hanging or exhausting the reader."""
+    from crfmap.io._yaml import load_text, read_text_file
+
+    try:
+        doc = load_text(read_text_file(metadata, "ROS2 bag metadata (metadata.yaml)"), metadata)
+    except InputError as exc:
+        raise InputError(path, f"metadata.yaml: {exc.problem}") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("rosbag2_bagfile_information"), dict):
+        raise InputError(path, "metadata.yaml has no 'rosbag2_bagfile_information' mapping: not a ROS2 bag")
+    for f in doc["rosbag2_bagfile_information"].get("relative_file_paths") or []:
+        if isinstance(f, str) and (metadata.parent / f).exists():
+            check_input_file(metadata.parent / f, "ROS2 bag storage file")
 
 
 def _reader_errors():
@@ -119,10 +139,11 @@ def _add_scan(c, path, topic, index, stamp, msg):
     c.scans.append((stamp, np.array(msg.ranges, dtype=np.float32)))
 
 
-def _add_transforms(c, msg, static):
+def _add_transforms(c, msg, static, path, topic, index):
     for tr in msg.transforms:
         stamp = None if static else to_seconds(tr.header.stamp)
-        c.tf.add(tr.header.frame_id, tr.child_frame_id, pose_of(tr.transform), stamp)
+        where = f"{path}: {topic} message {index} ({tr.header.frame_id} -> {tr.child_frame_id})"
+        c.tf.add(tr.header.frame_id, tr.child_frame_id, pose_of(tr.transform, where), stamp)
 
 
 def _pick_topic(path, conns, msgtype_names, wanted, preferred, what, required_choice=True):
@@ -176,13 +197,13 @@ def _collect(path, location, scan_topic):
                 if kind == "scan":
                     _add_scan(c, path, conn.topic, index, stamp, msg)
                 elif kind == "odom":
-                    pose = pose_of(msg.pose.pose)
+                    pose = pose_of(msg.pose.pose, f"{path}: {conn.topic} message {index}")
                     c.odom.append((stamp, *pose, float(msg.twist.twist.linear.x), float(msg.twist.twist.angular.z)))
                     c.odom_frames = (msg.header.frame_id.lstrip("/"), msg.child_frame_id.lstrip("/"))
                 elif kind in ("tf", "tf_static"):
-                    _add_transforms(c, msg, static=(kind == "tf_static"))
+                    _add_transforms(c, msg, kind == "tf_static", path, conn.topic, index)
                 elif kind == "truth":
-                    c.truth.append((stamp, *pose_of(msg.pose)))
+                    c.truth.append((stamp, *pose_of(msg.pose, f"{path}: {conn.topic} message {index}")))
                     c.truth_frame = msg.header.frame_id.lstrip("/")
                 elif kind == "map":
                     c.grid = msg
@@ -237,11 +258,14 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
     >>> rec.laser_mount  # doctest: +SKIP
     (0.00393584, 0.0, 1.5707963267948966)
     """
-    path = Path(path)
+    path = check_path_arg(path, "bag file or folder")
     if pose_source not in POSE_SOURCES:
         raise InputError("pose_source", f"expected one of {', '.join(POSE_SOURCES)}, got {pose_source!r}")
     if laser_mount is not None:
-        laser_mount = np.asarray(laser_mount, np.float64)
+        try:
+            laser_mount = np.asarray(laser_mount, np.float64)
+        except (TypeError, ValueError):
+            raise InputError("laser_mount", f"expected finite (x, y, yaw), got {laser_mount!r}") from None
         if laser_mount.shape != (3,) or not np.all(np.isfinite(laser_mount)):
             raise InputError("laser_mount", f"expected finite (x, y, yaw), got {laser_mount!r}")
     location, fmt = _bag_location(path)

@@ -10,38 +10,67 @@ The n beams span 180 degrees counter-clockwise from the robot's right:
 ``angle_k = -pi/2 + k * pi / (n - 1)``. In the "corrected" logs both pose triples of a
 FLASER line hold the SLAM-corrected pose, which we use as the laser pose (a zero laser
 mount; ``robot_frontlaser_offset`` is 0 in these logs and is kept in ``meta``). ODOM
-lines are the raw odometry track. The largest reading in a file is the sensor's
-no-return code (81.83 m in Intel, 50.00 m in ACES); those readings become ``+inf``
-(REP 117 "no return"). Other message types (NEFF, SYNC, ...) are skipped and counted.
+lines are the raw odometry track. Other message types (NEFF, SYNC, ...) are skipped
+and counted.
+
+No returns. A SICK scanner reports "nothing returned" as a reading at or beyond its
+maximum range, and not as one exact number: 81.83 m in Intel, 50.00 m in ACES, and
+81.87, 81.89 and 81.91 m mixed in one file in other public logs. Readings at or beyond
+the laser's maximum range become ``+inf`` (REP 117 "no return"), never hits. The
+maximum range is, in this order: the ``max_range`` argument (``crfmap build --max-range``);
+the log's ``PARAM robot_front_laser_max``; else (:func:`guess_max_range`) the SICK LMS
+limit :data:`SICK_NO_RETURN` (80 m: a SICK LMS 2xx measures at most 80 m, so 81.83-81.91
+are codes) for readings beyond it, and the file's largest reading only if it is a spike
+(a code: at least :data:`SPIKE_MIN_COUNT` readings exactly there, and
+:data:`SPIKE_RATIO` times more than in the half metre below it, where a real wall's
+readings would spread). A log whose longest reading is a real wall keeps it as a hit.
 """
 from __future__ import annotations
 
 import gzip
 import math
+import zlib
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
+from crfmap.checks import MAX_EXTENT_M, check_input_file, check_path_arg
 from crfmap.errors import InputError
 from crfmap.recording import Recording, ScanSet, Trajectory
 
-NO_RETURN_TOLERANCE = 0.005  # [m] readings this close to the no-return code are no-returns (logs print cm)
+NO_RETURN_TOLERANCE = 0.005  # [m] readings this close below the maximum range count as at it (logs print cm)
+SICK_NO_RETURN = 80.0  # [m] a SICK LMS 2xx measures at most 80 m; readings beyond are its no-return codes
+SPIKE_MIN_COUNT = 10  # readings exactly at the file's maximum before it may be a no-return code ...
+SPIKE_RATIO = 3.0  # ... and this many times more than in the SPIKE_BAND below it
+SPIKE_BAND = 0.5  # [m]
+MAX_LOG_BYTES = 256 << 20  # [bytes] of (decompressed) log text: Intel's is 6 MB; more is a gzip bomb or not a log
+_CHUNK = 8 << 20  # [bytes] read at a time, so that binary content is refused early
+MAX_BEAMS = 100_000  # readings per FLASER line
 FLASER_FIXED_FIELDS = 9  # after the ranges: x y theta odom_x odom_y odom_theta ipc_ts hostname logger_ts
 ODOM_FIELDS = 9  # x y theta tv rv accel ipc_ts hostname logger_ts
 
 
 def _read_text(path: Path) -> str:
-    if not path.exists():
-        raise InputError(path, "no such file")
-    if path.is_dir():
-        raise InputError(path, "is a folder, expected a CARMEN log file (.log or .log.gz)")
-    raw = path.read_bytes()
-    if raw[:2] == b"\x1f\x8b":
-        try:
-            raw = gzip.decompress(raw)
-        except (OSError, EOFError) as exc:
-            raise InputError(path, f"corrupt gzip data ({exc})") from None
+    path = check_input_file(path, "a CARMEN log file (.log or .log.gz)", missing="no such file")
+    if path.stat().st_size > MAX_LOG_BYTES:
+        raise InputError(path, f"larger than {MAX_LOG_BYTES >> 20} MB: not a CARMEN log crfmap reads")
+    with open(path, "rb") as f:
+        gzipped = f.read(2) == b"\x1f\x8b"
+    chunks, size = [], 0
+    try:
+        with (gzip.open(path, "rb") if gzipped else open(path, "rb")) as f:
+            while chunk := f.read(_CHUNK):  # decompress at most MAX_LOG_BYTES: a gzip bomb stops there
+                if b"\0" in chunk:
+                    raise InputError(path, f"not a text CARMEN log (a NUL byte at byte {size + chunk.index(0)})")
+                chunks.append(chunk)
+                size += len(chunk)
+                if size > MAX_LOG_BYTES:
+                    raise InputError(path, f"expands to more than {MAX_LOG_BYTES >> 20} MB of text (a gzip "
+                                           "bomb?): not a CARMEN log crfmap reads")
+    except (OSError, EOFError, zlib.error) as exc:
+        raise InputError(path, f"corrupt gzip data ({exc})") from None
+    raw = b"".join(chunks)
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -64,43 +93,80 @@ def _parse_rows(path, rows, line_numbers, width, what):
     return values.reshape(len(rows), width)
 
 
-def _no_return_code(ranges: np.ndarray, no_return):
-    """The no-return code to use: a number, or None; 'auto' = the file's largest reading if repeated."""
-    if no_return is None:
+def guess_max_range(ranges: np.ndarray):
+    """The maximum range [m] implied by the readings of a log without ``PARAM robot_front_laser_max``, or None.
+
+    Readings beyond :data:`SICK_NO_RETURN` (80 m) are codes whatever their exact value; else
+    the file's largest reading is the maximum only if it is a spike (see the module notes).
+
+    >>> r = np.r_[np.linspace(1, 49.9, 500), np.full(40, 50.0)]
+    >>> guess_max_range(r), guess_max_range(np.linspace(1, 12, 500)), guess_max_range(np.r_[r, 81.87, 81.91])
+    (50.0, None, 80.0)
+    """
+    finite = ranges[np.isfinite(ranges)]
+    if finite.size == 0:
         return None
-    if isinstance(no_return, str):
-        if no_return != "auto":
-            raise InputError("no_return", f"expected 'auto', a range in metres or None, got {no_return!r}")
-        finite = ranges[np.isfinite(ranges)]
-        if finite.size == 0:
-            return None
-        largest = float(finite.max())
-        # A genuine reading is rarely repeated exactly at the maximum; the code is (hundreds of times).
-        return largest if np.count_nonzero(finite >= largest - NO_RETURN_TOLERANCE) >= 2 else None
-    code = float(no_return)
-    if not (math.isfinite(code) and code > 0):
-        raise InputError("no_return", f"the no-return code must be a positive range in metres, got {no_return!r}")
-    return code
+    if finite.max() >= SICK_NO_RETURN:
+        return SICK_NO_RETURN
+    largest = float(finite.max())
+    at_max = np.count_nonzero(finite >= largest - NO_RETURN_TOLERANCE)
+    below = np.count_nonzero((finite >= largest - SPIKE_BAND) & (finite < largest - NO_RETURN_TOLERANCE))
+    return largest if at_max >= SPIKE_MIN_COUNT and at_max >= SPIKE_RATIO * below else None
 
 
-def read_carmen(path, no_return="auto") -> Recording:
+def _max_range(ranges, params, path, max_range, no_return):
+    """(maximum range [m] or None, where it came from)."""
+    name = "max_range"
+    if no_return is not _UNSET:  # the older keyword: a range [m], 'auto' or None
+        max_range, name = no_return, "no_return"
+    if max_range is None:
+        return None, "none (every reading is a hit)"
+    if isinstance(max_range, str):
+        if max_range != "auto":
+            raise InputError(name, f"expected 'auto', a range in metres or None, got {max_range!r}")
+        text = params.get("robot_front_laser_max")
+        if text is not None:
+            try:
+                value = float(text)
+            except ValueError:
+                value = math.nan
+            if not (math.isfinite(value) and value > 0):
+                raise InputError(path, f"PARAM robot_front_laser_max {text!r} is not a positive range in metres")
+            return value, "PARAM robot_front_laser_max"
+        guess = guess_max_range(ranges)
+        return guess, ("guessed from the readings" if guess is not None else "none found (every reading is a hit)")
+    if isinstance(max_range, bool) or not isinstance(max_range, (int, float, np.integer, np.floating)):
+        raise InputError(name, f"expected 'auto', a range in metres or None, got {max_range!r}")
+    value = float(max_range)
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(name, f"the maximum range must be a positive number of metres, got {max_range!r}")
+    return value, "given"
+
+
+_UNSET = object()
+
+
+def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
     """Read a CARMEN log (plain or gzip) into a :class:`~crfmap.recording.Recording`.
 
     Parameters
     ----------
     path : str or Path
         The log (``.log`` or ``.log.gz``; compression is detected from the content).
-    no_return : 'auto', float or None
-        The range [m] the sensor reports when nothing returned; readings within
-        ``NO_RETURN_TOLERANCE`` of it become ``+inf``. 'auto' takes the file's largest
-        reading when it occurs more than once; None keeps every reading as it is.
+    max_range : 'auto', float or None
+        The laser's maximum range [m]: readings at or beyond it (less
+        ``NO_RETURN_TOLERANCE``) are no-returns and become ``+inf``. 'auto': the log's
+        ``PARAM robot_front_laser_max``, else :func:`guess_max_range`; None keeps every
+        reading as it is.
+    no_return : float, 'auto' or None
+        Older name of ``max_range`` (used when given).
 
     Returns
     -------
     Recording
         ``scans`` (laser poses = corrected FLASER poses in ``map``), ``true_poses``
         (the same poses as base_link in map), ``odometry`` (ODOM lines, with twists),
-        ``meta`` (PARAM values, counts, the no-return code).
+        ``meta`` (PARAM values, counts, the maximum range and where it came from).
 
     Examples
     --------
@@ -108,7 +174,7 @@ def read_carmen(path, no_return="auto") -> Recording:
     >>> rec.scans.ranges.shape  # doctest: +SKIP
     (910, 180)
     """
-    path = Path(path)
+    path = check_path_arg(path, "CARMEN log file name")
     text = _read_text(path)
     laser_rows, laser_lines = [], []
     odom_rows, odom_lines = [], []
@@ -125,6 +191,8 @@ def read_carmen(path, no_return="auto") -> Recording:
             if len(tokens) < 2 or not tokens[1].isdigit():
                 raise InputError(path, f"line {line_no}: FLASER needs the number of readings after the keyword")
             n = int(tokens[1])
+            if n > MAX_BEAMS:
+                raise InputError(path, f"line {line_no}: FLASER with {n} readings; at most {MAX_BEAMS} are accepted")
             if n < 2:
                 raise InputError(path, f"line {line_no}: FLASER with {n} reading(s); need at least 2")
             if n_beams is None:
@@ -172,18 +240,27 @@ def read_carmen(path, no_return="auto") -> Recording:
     bad_pose = ~np.all(np.isfinite(poses), axis=1)
     if bad_pose.any():
         raise InputError(path, f"line {laser_lines[int(np.argmax(bad_pose))]}: FLASER pose is not finite")
+    far = np.abs(poses[:, :2]).max(axis=1) > MAX_EXTENT_M
+    if far.any():
+        row = int(np.argmax(far))
+        raise InputError(path, f"line {laser_lines[row]}: FLASER pose ({poses[row, 0]:g}, {poses[row, 1]:g}) lies "
+                               f"beyond {MAX_EXTENT_M:g} m: a corrupt field?")
+    bad_stamp = ~np.isfinite(stamps) | (np.abs(stamps) > 1e11)  # 1e11 s: year 5138; beyond is a corrupt field
+    if bad_stamp.any():
+        raise InputError(path, f"line {laser_lines[int(np.argmax(bad_stamp))]}: FLASER timestamp "
+                               f"{stamps[int(np.argmax(bad_stamp))]!r} is not a time")
     negative = np.nan_to_num(ranges, nan=0.0) < 0
     if negative.any():
         row = int(np.argmax(negative.any(axis=1)))
         raise InputError(path, f"line {laser_lines[row]}: negative range reading")
 
-    code = _no_return_code(ranges, no_return)
-    ranges = ranges.astype(np.float32)
+    code, code_source = _max_range(ranges, params, path, max_range, no_return)
     n_no_return = 0
     if code is not None:
-        is_code = np.abs(ranges - np.float32(code)) <= np.float32(NO_RETURN_TOLERANCE)
+        is_code = ranges >= code - NO_RETURN_TOLERANCE  # compared in float64, as the log printed them
         n_no_return = int(np.count_nonzero(is_code))
-        ranges[is_code] = np.inf
+        ranges = np.where(is_code, np.inf, ranges)
+    ranges = ranges.astype(np.float32)
     finite = ranges[np.isfinite(ranges)]
     range_max = code if code is not None else (float(finite.max()) if finite.size else 0.0)
 
@@ -206,13 +283,17 @@ def read_carmen(path, no_return="auto") -> Recording:
         if not np.all(np.isfinite(odom[:, :3])):
             row = int(np.argmax(~np.all(np.isfinite(odom[:, :3]), axis=1)))
             raise InputError(path, f"line {odom_lines[row]}: ODOM pose is not finite")
+        bad = ~np.isfinite(odom[:, 6]) | (np.abs(odom[:, 6]) > 1e11)
+        if bad.any():
+            raise InputError(path, f"line {odom_lines[int(np.argmax(bad))]}: ODOM timestamp is not a time")
         odometry = Trajectory(odom[:, 6].copy(), odom[:, :3].copy(), frame_id="odom",
                               child_frame_id="base_link", twists=odom[:, 3:5].copy())
     meta = {
         "source": str(path),
         "format": "carmen",
         "params": params,
-        "no_return_code": code,
+        "no_return_code": code,  # the maximum range [m]: readings at or beyond it are no-returns
+        "max_range_source": code_source,
         "no_return_readings": n_no_return,
         "skipped_messages": dict(skipped),
     }

@@ -31,6 +31,8 @@ from PIL import Image
 from crfmap.io._yaml import finite_number, format_number, read_mapping
 from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
 from crfmap.io.atomic import atomic_path
+from crfmap.io.image_guard import check_map_image
+from crfmap.checks import check_path_arg
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.io.npy_grid import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
@@ -80,7 +82,7 @@ def read_map_yaml(yaml_path) -> dict:
     >>> read_map_yaml("map.yaml")["resolution"]  # doctest: +SKIP
     0.05
     """
-    path = Path(yaml_path)
+    path = check_path_arg(yaml_path, "map YAML file name")
     doc = read_mapping(path, "map YAML file")
     for key in _REQUIRED_KEYS:
         if key not in doc:
@@ -137,6 +139,12 @@ def _check_pnm_header(image_path, source, context):
                                      f"({expected} bytes) but the file holds {found} bytes{context}")
 
 
+def _check_image_header(image_path, source, context):
+    """Size and kind from the header before decoding (crfmap.io.image_guard), then PNM's own header."""
+    check_map_image(image_path, context)
+    _check_pnm_header(image_path, source, context)
+
+
 def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAULT_LOADER) -> OccupancyGrid:
     """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
 
@@ -172,7 +180,7 @@ def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAUL
     free_t = params["free_thresh"] if free_thresh is None else float(free_thresh)
     if occupied_thresh is not None or free_thresh is not None:
         _check_thresholds(occ_t, free_t, "load_map thresholds")
-    pixels = read_pixels(params["image_path"], f" (the image of {Path(yaml_path)})", _check_pnm_header)
+    pixels = read_pixels(params["image_path"], f" (the image of {Path(yaml_path)})", _check_image_header)
     values = occupancy(pixels, params["mode"], params["negate"], occ_t, free_t, loader=loader)
     meta = dict(params["extra"])
     meta.update({key: params[key] for key in ("image", "mode", "negate", "occupied_thresh", "free_thresh")})

@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from crfmap.checks import check_cells, check_grid_geometry, check_input_file, check_path_arg
 from crfmap.io._yaml import finite_number, format_number, read_mapping, write_text
-from crfmap.io.atomic import atomic_path
+from crfmap.io.atomic import atomic_paths, unit_lock
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid, check_probability_array
 
@@ -37,12 +38,14 @@ def save_npy(grid: OccupancyGrid, path) -> Path:
     """Save P(occupied) exactly as a 2-D float ``.npy`` [y, x] plus its sidecar YAML.
 
     The sidecar (:func:`npy_sidecar_path`) holds ``resolution``, ``origin`` and
-    ``frame_id``; both files are written atomically, array first.
+    ``frame_id``; both files are written atomically and renamed as one unit
+    (:func:`crfmap.io.atomic.atomic_paths`): a concurrent :func:`load_npy` sees the old pair
+    or the new one, never one of each.
 
     >>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
     PosixPath('g.npy')
     """
-    path = Path(path)
+    path = check_path_arg(path, "file name ending in .npy")
     if path.suffix.lower() != ".npy":
         raise InputError(path, "an .npy grid file must end in .npy")
     if not isinstance(grid, OccupancyGrid):
@@ -52,11 +55,10 @@ def save_npy(grid: OccupancyGrid, path) -> Path:
             f"resolution: {format_number(grid.resolution)}\n"
             f"origin: [{', '.join(format_number(v) for v in grid.origin)}]\n"
             f"frame_id: {json.dumps(grid.frame_id)}\n")
-    with atomic_path(path) as tmp:
+    with atomic_paths(path, sidecar) as (tmp, tmp_sidecar):
         with open(tmp, "wb") as f:  # a file object: np.save would append .npy to a name
             np.save(f, np.ascontiguousarray(grid.probability), allow_pickle=False)
-    with atomic_path(sidecar) as tmp:
-        write_text(tmp, text)
+        write_text(tmp_sidecar, text)
     return path
 
 
@@ -72,6 +74,8 @@ def _read_sidecar(sidecar):
     frame_id = doc.get("frame_id", "map")
     if not isinstance(frame_id, str):
         raise InputError(sidecar, f"key 'frame_id' must be a string, got {frame_id!r}")
+    if len(frame_id) > 256 or any(not c.isprintable() for c in frame_id):
+        raise InputError(sidecar, f"key 'frame_id' must be a short printable name, got {frame_id[:40]!r}")
     return resolution, origin, frame_id
 
 
@@ -83,22 +87,46 @@ def load_npy(path) -> OccupancyGrid:
     >>> load_npy("g.npy").shape  # doctest: +SKIP
     (2, 3)
     """
-    path = Path(path)
-    if not path.exists():
-        raise InputError(path, ".npy grid file not found")
-    try:
-        arr = np.load(path, allow_pickle=False)
-    except ValueError as exc:
-        raise InputError(path, f"not a plain .npy array ({exc})") from None
-    except (OSError, EOFError) as exc:
-        raise InputError(path, f"unreadable .npy file ({exc})") from None
-    if not isinstance(arr, np.ndarray):
-        arr.close()
-        raise InputError(path, "is an .npz archive, expected a single .npy array")
-    if arr.ndim == 2 and arr.size and not np.issubdtype(arr.dtype, np.floating):
-        raise InputError(path, f"expected float probabilities, got dtype {arr.dtype}")
-    arr = check_probability_array(arr, path)  # 2-D, not empty, finite, in [0, 1]
+    path = check_input_file(check_path_arg(path), ".npy grid file")
     sidecar = npy_sidecar_path(path)
-    resolution, origin, frame_id = _read_sidecar(sidecar) if sidecar.exists() else (1.0, (0.0, 0.0, 0.0), "map")
+    with unit_lock(path.parent, exclusive=False):  # the array and its sidecar of one save_npy
+        with open(path, "rb") as f:
+            _check_header(f, path)
+        try:
+            arr = np.load(path, allow_pickle=False)
+        except (ValueError, OverflowError) as exc:
+            raise InputError(path, f"not a plain .npy array ({exc})") from None
+        except (OSError, EOFError) as exc:
+            raise InputError(path, f"unreadable .npy file ({exc})") from None
+        if not isinstance(arr, np.ndarray):
+            arr.close()
+            raise InputError(path, "is an .npz archive, expected a single .npy array")
+        has_sidecar = sidecar.exists() or sidecar.is_symlink()
+        geometry = _read_sidecar(sidecar) if has_sidecar else (1.0, (0.0, 0.0, 0.0), "map")
+    arr = check_probability_array(arr, path)  # 2-D, not empty, finite, in [0, 1]
+    resolution, origin, frame_id = geometry
+    check_grid_geometry(sidecar if has_sidecar else path, resolution, origin, arr.shape[1], arr.shape[0])
     return OccupancyGrid(arr, resolution=resolution, origin=origin, frame_id=frame_id,
                          meta={"source": str(path)})
+
+
+def _check_header(f, path):
+    """Refuse from the header alone what should not be read: not .npy, not a float grid, too many cells."""
+    try:
+        version = np.lib.format.read_magic(f)
+        if version not in ((1, 0), (2, 0), (3, 0)):
+            raise ValueError(f"unknown .npy version {version}")
+        reader = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, _, dtype = reader(f, max_header_size=10_000)
+    except (ValueError, OverflowError, SyntaxError, TypeError, EOFError, OSError) as exc:
+        if str(exc).startswith("Header info length") or "max_header_size" in str(exc):
+            raise InputError(path, "not a plain .npy array (its header is longer than 10000 bytes)") from None
+        if f.tell() == 0 or isinstance(exc, EOFError):
+            raise InputError(path, f"not an .npy file or truncated ({exc})") from None
+        raise InputError(path, f"not a plain .npy array ({exc})") from None
+    if dtype.hasobject:
+        raise InputError(path, "not a plain .npy array: it holds Python objects (pickled data); expected a float array")
+    if len(shape) == 2 and shape[0] and shape[1] and dtype.kind != "f":
+        raise InputError(path, f"expected float probabilities, got dtype {dtype}")
+    if len(shape) == 2:
+        check_cells(path, shape[1], shape[0])

@@ -1,0 +1,211 @@
+"""Run one catalogue case (in this process or a child) and say what, if anything, was not clean.
+
+``python tests/hostile/harness.py [--json FILE]`` runs every case, each command line in a
+child process (a time limit, an address-space limit), and prints the table per class:
+tried / clean / other. The pytest suite (test_catalogue.py) runs the same checks, most
+cases in-process.
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import io
+import json
+import os
+import resource
+import signal
+import stat
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+TIME_LIMIT = 120.0  # [s] per case: a refusal comes long before (generous: the test machine is shared)
+MEMORY_LIMIT = 3 << 30  # [bytes] address space of a child (numba needs some)
+FSIZE_LIMIT = 8 << 20  # [bytes] RLIMIT_FSIZE for the "fsize" fault (numba cache files stay below it)
+
+
+def snapshot(folder):
+    """{relative path: (kind, content hash)} of everything under ``folder`` (links and FIFOs not followed)."""
+    out = {}
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            p = Path(root) / name
+            st = p.lstat()
+            if stat.S_ISREG(st.st_mode):
+                out[str(p.relative_to(folder))] = ("file", hashlib.sha1(p.read_bytes()).hexdigest())
+            else:
+                out[str(p.relative_to(folder))] = (stat.S_IFMT(st.st_mode), None)
+    return out
+
+
+def _timeout(signum, frame):
+    raise TimeoutError(f"no answer within {TIME_LIMIT:g} s")
+
+
+def run_inprocess(case, spec, d):
+    """(exit status, stderr text) of running ``spec`` here, with the case's fault."""
+    from faults import fault
+    from crfmap.cli import main
+    from crfmap.errors import CrfmapError
+
+    err = io.StringIO()
+    old = signal.signal(signal.SIGALRM, _timeout)
+    signal.alarm(int(TIME_LIMIT))
+    cwd = os.getcwd()
+    os.chdir(d)
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), fault(case.fault, d):
+            if "call" in spec:
+                try:
+                    spec["call"]()
+                    rc = 0
+                except CrfmapError as exc:
+                    print(f"error: {exc}", file=sys.stderr)
+                    rc = 2
+            else:
+                try:
+                    rc = main(spec["argv"])
+                except SystemExit as exc:
+                    rc = exc.code if isinstance(exc.code, int) else 1
+    except BaseException as exc:  # what the command line would show: a traceback
+        import traceback
+
+        err.write("Traceback (most recent call last):\n" + "".join(traceback.format_exception_only(exc)))
+        rc = 1
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+        os.chdir(cwd)
+    return rc, err.getvalue()
+
+
+def _child_limits(fsize):
+    def apply():
+        # A background job inherits SIGINT ignored (and Python then keeps it ignored): a user's Ctrl-C reaches it.
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+        if fsize:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (FSIZE_LIMIT, FSIZE_LIMIT))
+    return apply
+
+
+def run_subprocess(case, spec, d):
+    """(exit status, stderr text) of a child ``crfmap`` process; signals are sent once a temporary appears."""
+    if case.fault not in (None, "fsize"):
+        code = (f"import sys; sys.path.insert(0, {str(HERE)!r}); from faults import fault; "
+                f"from crfmap.cli import main\nwith fault({case.fault!r}, {str(d)!r}): rc = main(sys.argv[1:])\n"
+                "sys.exit(rc)")
+    else:
+        code = "import sys; from crfmap.cli import main; sys.exit(main(sys.argv[1:]))"
+    env = dict(os.environ, PYTHONWARNINGS="default")
+    proc = subprocess.Popen([sys.executable, "-c", code, *spec["argv"]], cwd=d, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_child_limits(case.fault == "fsize"))
+    start = time.monotonic()
+    sent = case.signal is None
+    while not sent and proc.poll() is None and time.monotonic() - start < TIME_LIMIT:
+        if any(n.startswith(".") for n in os.listdir(d)):
+            proc.send_signal(case.signal)
+            sent = True
+        else:
+            time.sleep(0.002)
+    try:
+        _, err = proc.communicate(timeout=max(1.0, TIME_LIMIT - (time.monotonic() - start)))
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err = proc.communicate()
+        return None, err + f"\n(killed after {TIME_LIMIT:g} s)"
+    if not sent:
+        err += "\n(finished before any temporary file appeared: signal not sent)"
+    return proc.returncode, err
+
+
+def problems(case, spec, rc, err, before, after, seconds):
+    """What is wrong with a run (empty: a clean refusal)."""
+    found = []
+    if rc != case.expect_rc:
+        found.append(f"exit status {rc}, expected {case.expect_rc}")
+    lines = [line for line in err.splitlines() if line.strip()]
+    if "Traceback" in err:
+        found.append("traceback")
+    if len(lines) != 1:
+        found.append(f"{len(lines)} stderr lines")
+    elif not any(n in lines[0] for n in spec["names"]):
+        found.append(f"error line does not name {spec['names']}")
+    if after != before:
+        added = sorted(set(after) - set(before))
+        changed = sorted(k for k in before if after.get(k) != before[k])
+        found.append(f"folder changed (added {added[:3]}, changed/removed {changed[:3]})")
+    if seconds > TIME_LIMIT:
+        found.append(f"took {seconds:.0f} s")
+    return found
+
+
+def run_case(case, inprocess=True):
+    """Set the case up in a fresh folder, run it, return (problems, stderr, seconds)."""
+    with tempfile.TemporaryDirectory(prefix="hostile-") as d:
+        d = Path(d).resolve()
+        spec = case.setup(d)
+        before = snapshot(d)
+        start = time.monotonic()
+        if "call" in spec or (inprocess and not case.subprocess):
+            rc, err = run_inprocess(case, spec, d)
+        else:
+            rc, err = run_subprocess(case, spec, d)
+        seconds = time.monotonic() - start
+        after = snapshot(d)
+        return problems(case, spec, rc, err, before, after, seconds), err, seconds
+
+
+def all_cases():
+    import cases
+    import cases_more  # noqa: F401  (registers the rest)
+
+    unique = {}
+    for c in cases.CASES:
+        unique.setdefault((c.cls, c.name), c)
+    return list(unique.values())
+
+
+def table(results):
+    """Markdown table per class: tried / clean / other."""
+    classes = {}
+    for case, found in results:
+        row = classes.setdefault(case.cls, [0, 0])
+        row[0] += 1
+        row[1] += not found
+    lines = ["| class | tried | clean | other |", "|---|---|---|---|"]
+    for cls, (tried, clean) in classes.items():
+        lines.append(f"| {cls} | {tried} | {clean} | {tried - clean} |")
+    tried = sum(r[0] for r in classes.values())
+    clean = sum(r[1] for r in classes.values())
+    lines.append(f"| all | {tried} | {clean} | {tried - clean} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    import argparse
+
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--json", help="write every case's result here")
+    parser.add_argument("--only", help="run cases whose class/name contains this")
+    parser.add_argument("--start", help="skip the cases before this class/name")
+    args = parser.parse_args()
+    results, records = [], []
+    started = args.start is None
+    for case in all_cases():
+        key = f"{case.cls}/{case.name}"
+        started = started or key == args.start
+        if (args.only and args.only not in key) or not started:
+            continue
+        found, err, seconds = run_case(case, inprocess=False)
+        results.append((case, found))
+        records.append(dict(case=key, problems=found, stderr=err[-600:], seconds=round(seconds, 2)))
+        print(f"{'clean' if not found else 'OTHER'} {key} ({seconds:.1f} s) {'; '.join(found)}", flush=True)
+    print(table(results))
+    if args.json:
+        Path(args.json).write_text(json.dumps(records, indent=1))

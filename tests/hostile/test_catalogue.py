@@ -1,0 +1,25 @@
+"""The hostile-input catalogue (cases.py, cases_more.py): every case is refused cleanly.
+
+Clean means: exit status 2 (library: InputError), exactly one stderr line naming the input,
+no traceback, the folder exactly as before (no output, previous output intact, no
+temporary file), within the time limit; children also under an address-space limit.
+Most cases run in this process (fast); signals and resource limits need a child.
+"""
+import pytest
+
+from harness import all_cases, run_case
+
+CASES = all_cases()
+
+
+@pytest.mark.parametrize("case", CASES, ids=[f"{c.cls}/{c.name}" for c in CASES])
+def test_refused_cleanly(case):
+    found, err, _ = run_case(case, inprocess=True)
+    assert not found, f"{found}\n--- stderr ---\n{err[-1500:]}"
+
+
+def test_catalogue_covers_every_class():
+    classes = {c.cls for c in CASES}
+    assert len(CASES) >= 80
+    assert classes >= {"maps", "yaml", "npy", "carmen", "ros1", "ros2", "potentials", "options", "output",
+                       "faults", "signals", "library"}
