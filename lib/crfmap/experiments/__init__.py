@@ -3,7 +3,8 @@
 Public API (imported on first use, so ``import crfmap.experiments`` stays cheap):
 
 - :mod:`crfmap.experiments.pipeline`: ``scan_scene``, ``evaluate_pipeline``, ``train_and_test``, ``search_tables``, ``PipelineResult``, ``TrainTest``
-- :mod:`crfmap.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``
+- :mod:`crfmap.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``, ``warm_up``
+- :mod:`crfmap.experiments.explorer_view` / ``explorer_panel``: the live figure updated in place, the widget panel
 - :mod:`crfmap.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
 """
 from __future__ import annotations
@@ -21,6 +22,7 @@ _API = {
     "observe": "explorer",
     "run": "explorer",
     "draw": "explorer",
+    "warm_up": "explorer",
     "gibbs_ising": "background",
     "ising_exact": "background",
     "ising_energy": "background",
