@@ -29,7 +29,7 @@ import numpy as np
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.lbp import SCHEDULES, LBPResult, disc_region, infer
-from crfmap.assess.metrics import Report, auc, evaluate, roc_curve
+from crfmap.assess.metrics import Report, evaluate
 from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
 
 EXPLORER_SCENES = ("x", "occluded-train", "occluded-test", "enclosed-train", "enclosed-test",
