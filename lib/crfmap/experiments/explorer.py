@@ -39,6 +39,9 @@ OFFICE_SIZE = (8.0, 6.0)  # [m] width, height of the explorer's office: small en
 OFFICE_RESOLUTION = 0.1  # [m/cell]
 TO_CONVERGENCE = 1000  # iterations cap when "to convergence" is asked for
 TOLERANCE = 1e-5  # largest message change that counts as converged
+# the explorer's grids have a few thousand cells: one thread is as fast, and never waits at a
+# parallel barrier for a second core that other work is using (seen as 0.2-1 s stalls)
+THREADS = 1
 _WARMED = set()  # (schedule, bounded, kernel) that ran in this process: their kernels are compiled
 
 
@@ -170,7 +173,8 @@ def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK
     max_iter = _check_iterations(iterations)
     radius = _check_radius(radius)
     region = None if radius is None else disc_region(ob.observed, ob.scene.start[:2], radius)
-    result = infer(ob.observed, hidden, link, schedule=schedule, max_iter=max_iter, tol=TOLERANCE, region=region)
+    result = infer(ob.observed, hidden, link, schedule=schedule, max_iter=max_iter, tol=TOLERANCE, region=region,
+                   threads=THREADS)
     _WARMED.add((schedule, region is not None, result.kernel))
     truth = ob.scene.truth
     settings = {"scene": scene, "noise": ob.noise, "noise_kind": ob.noise_kind, "hidden": hidden.tolist(),
@@ -222,7 +226,8 @@ def warm_up(schedules=SCHEDULES, on_schedule=None) -> dict:
         kernels = ("auto", "plain") if schedule == "checkerboard" else ("auto",)
         for kernel in kernels:
             for region in (None, inner):
-                r = infer(grid, schedule=schedule, max_iter=2, tol=TOLERANCE, region=region, kernel=kernel)
+                r = infer(grid, schedule=schedule, max_iter=2, tol=TOLERANCE, region=region, kernel=kernel,
+                          threads=THREADS)
                 _WARMED.add((schedule, region is not None, r.kernel))
         seconds[schedule] = time.perf_counter() - t0
     return seconds
