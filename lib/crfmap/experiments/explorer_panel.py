@@ -13,7 +13,7 @@ headless: the benchmark (:mod:`crfmap.bench.explorer`) times real widget changes
 >>> panel = ExplorerPanel()
 >>> _ = panel.redraw()
 >>> panel.controls["h_oo"].value = 8.0
->>> panel.timings[-1]["change"], panel.image.value[:4]
+>>> panel.timings[-1]["change"], bytes(panel.image.value[:4])
 ('h_oo', b'\\x89PNG')
 """
 from __future__ import annotations
