@@ -74,3 +74,53 @@ def test_bad_bench_arguments_are_one_line_errors(capsys):
     assert main(["bench", "--sizes", "4"]) == 2
     assert "--sizes" in capsys.readouterr().err
     assert main(["bench", "--repeats", "0"]) == 2
+
+
+# --- issue 13's rows: speed as users feel it ----------------------------------------------------------
+
+def test_quick_bench_has_a_row_for_each_user_facing_goal(quick_records):
+    rows = {}
+    for r in quick_records:
+        rows.setdefault(r["method"], []).append(r)
+    assert {"infer-vs-kernel", "start-cold", "start-warm", "start-env", "explorer-redraw", "explorer-scene-change",
+            "reproduce", "converge-start"} <= set(rows)
+    # end to end against the same run's kernel, same size / dtype / threads
+    (ratio,) = rows["infer-vs-kernel"]
+    (kernel,) = [r for r in rows["crfmap-fast"] if r["dtype"] == "float32" and r["threads"] == ratio["threads"]]
+    (end_to_end,) = rows["crfmap-infer"]
+    assert ratio["kernel_mcells_per_second"] == kernel["mcells_per_second"]
+    assert ratio["ratio"] == pytest.approx(end_to_end["mcells_per_second"] / kernel["mcells_per_second"])
+    # quick: the empty-cache start is skipped, saying so; the warm ones are timed
+    (cold,) = rows["start-cold"]
+    assert cold["seconds"] is None and "quick" in cold["note"]
+    assert rows["start-warm"][0]["seconds"] > 0 and rows["start-env"][0]["seconds"] > 0
+    (redraw,) = rows["explorer-redraw"]
+    assert redraw["changes"] == 6 and redraw["compiled_during_changes"] == 0
+    assert 0 < redraw["draw_seconds"] <= redraw["max_seconds"] and redraw["seconds"] > 0
+    (reproduce,) = rows["reproduce"]
+    assert reproduce["seconds"] is None and reproduce["note"].startswith("no timing record") or reproduce["seconds"] > 0
+    uniform = [r for r in rows["converge-start"] if r["start"] == "uniform"]
+    assert uniform[0]["converged"] and uniform[0]["size"] == 256 and uniform[0]["max_belief_difference_vs_uniform"] == 0
+    assert len(rows["converge-start"]) == 2  # the coarse start's row, measured or saying infer() has none
+
+
+def test_reproduce_row_reads_the_last_runs_record(tmp_path):
+    from crfmap.bench.goals import reproduce_record
+
+    path = tmp_path / "reproduce_timings.json"
+    assert reproduce_record(path)["seconds"] is None
+    path.write_text(json.dumps({"seconds": {"01_a.ipynb": 12.0, "09_speed.ipynb": 150.0}, "total_seconds": 170.5,
+                                "quick": False}))
+    rec = reproduce_record(path)
+    assert rec["seconds"] == 170.5 and rec["slowest"] == "09_speed.ipynb" and rec["record_quick"] is False
+
+
+def test_coarse_start_option_is_one_that_changes_the_start():
+    from crfmap.bench.goals import COARSE_START_OPTIONS, coarse_start_option
+
+    option = coarse_start_option()
+    assert option is None or option in COARSE_START_OPTIONS
+    if option is not None:
+        obs = bench.bench_grid(32, kind="office")
+        assert not np.array_equal(infer(obs, max_iter=1, tol=0.0, **option).beliefs.probability,
+                                  infer(obs, max_iter=1, tol=0.0).beliefs.probability)

@@ -99,3 +99,74 @@ def test_bad_settings_name_the_argument(kwargs, name):
     with pytest.raises(InputError) as err:
         explorer.run(**kwargs)
     assert str(err.value).startswith(f"{name}:")
+
+
+# --- the live panel: one figure updated in place, kernels compiled up front -------------------------
+
+def _pixels(png):
+    import io
+
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+def test_view_updated_in_place_shows_what_a_fresh_figure_shows():
+    from crfmap.experiments.explorer_view import ExplorerView
+
+    first = explorer.run("x", 0.42, iterations=2)
+    second = explorer.run("office", 0.05, schedule="thesis", radius=2.0, hidden=[[6.0, 1.0], [1.0, 6.0]])
+    third = explorer.run("office", 0.05, iterations=3)
+    view = ExplorerView()
+    for ex in (first, second, third, second):  # scene change, then in-place updates
+        live = _pixels(view.update(ex).png())
+        fresh = _pixels(ExplorerView(live=False).update(ex).png())
+        assert live.shape == fresh.shape
+        differ = np.any(live != fresh, axis=2).mean()
+        assert differ < 1e-4, differ  # a few anti-aliased pixels where a line meets the frame
+    stale = _pixels(ExplorerView(live=False).update(third).png())
+    assert np.any(live != stale, axis=2).mean() > 1e-3  # the comparison can fail
+
+
+def _signatures():
+    import sys
+
+    from numba.core.registry import CPUDispatcher
+
+    return {f"{m}.{k}": len(v.signatures) for m, mod in list(sys.modules.items()) if m.startswith("crfmap")
+            for k, v in vars(mod).items() if isinstance(v, CPUDispatcher)}
+
+
+def test_warm_up_compiles_every_kernel_the_explorer_calls():
+    seconds = explorer.warm_up()
+    assert set(seconds) == set(explorer.SCHEDULES)
+    before = _signatures()
+    assert sum(before.values()) > 0
+    for schedule in explorer.SCHEDULES:
+        for radius in (None, 1.5):
+            for hidden in ([[10.0, 1.0], [1.0, 10.0]], [[3.0, 0.7], [1.3, 2.5]], [[1.0, 0.0], [0.0, 1.0]]):
+                for iterations in (None, 2):
+                    explorer.run("x", 0.42, hidden=hidden, schedule=schedule, iterations=iterations, radius=radius)
+        explorer.run("office", 0.05, schedule=schedule, radius=2.0, iterations=3)
+    assert _signatures() == before
+
+
+def test_panel_redraws_on_each_widget_change():
+    from crfmap.experiments.explorer_panel import ExplorerPanel
+
+    panel = ExplorerPanel(iterations=2)
+    panel.warm_up()
+    assert panel.status.value.startswith("LBP kernels ready")
+    panel.redraw()
+    first = panel.image.value
+    panel.controls["schedule"].value = "thesis"
+    assert panel.timings[-1]["change"] == "schedule" and not panel.timings[-1]["compiled"]
+    assert "thesis: 2 iterations" in panel.status.value and "drawing" in panel.status.value
+    assert panel.image.value != first
+    panel.controls["h_oo"].value = 3.0
+    assert panel.settings()["hidden"] == [[3.0, 1.0], [1.0, 10.0]]
+    n = len(panel.timings)
+    panel.reset_tables()  # one redraw, not one per slider
+    assert len(panel.timings) == n + 1 and panel.settings()["hidden"] == [[10.0, 1.0], [1.0, 10.0]]
+    panel.controls["l_oo"].value = 0.0  # link row C1 is [0, 0]: the error in the status line, not a crash
+    assert panel.status.value.startswith("<span") and "link" in panel.status.value and len(panel.timings) == n + 1

@@ -3,6 +3,8 @@
 Public API (imported on first use, so ``import crfmap.bench`` stays cheap):
 
 - :mod:`crfmap.bench.suite`: ``run``, ``format_record``, ``to_json``
+- :mod:`crfmap.bench.goals`: issue 13's rows (end to end vs kernel, cold / warm start, explorer redraw,
+  reproduce time, convergence from each start), run by ``run(goals=True)``
 """
 from __future__ import annotations
 

@@ -29,6 +29,9 @@ Methods:
   same model (:mod:`crfmap.bench.external`); a "not installed" record otherwise.
 - ``jit-compile``: the first calls of :func:`crfmap.crf.lbp.infer` in a new process, with an empty
   numba cache (compilation; not in quick runs) and with the package's cache.
+- issue 13's goals (``goals=True``, :mod:`crfmap.bench.goals`): ``infer-vs-kernel`` (per size),
+  ``start-cold`` / ``start-warm`` / ``start-env``, ``explorer-redraw`` / ``explorer-scene-change``,
+  ``reproduce`` (read from the last run's record) and ``converge-start`` (4096², quick 256²).
 """
 from __future__ import annotations
 
@@ -223,7 +226,7 @@ def compile_seconds(cold=True) -> dict:
 
 
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
-        external=True):
+        external=True, goals=True):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI)."""
     from tqdm.auto import tqdm
 
@@ -240,6 +243,11 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         tasks.append(("online", None))
     if external:
         tasks.append(("external", None))
+    if goals:
+        from crfmap.bench import goals as G
+
+        tasks += [("start", None), ("explorer", None), ("reproduce", None),
+                  ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)]
     bar = tqdm(tasks, desc="bench", disable=not progress)
     for kind, size in bar:
         bar.set_postfix_str(f"{kind} {size or ''}".strip())
@@ -257,14 +265,19 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             yield compile_seconds(cold=False)
         elif kind == "throughput":
             yield bench_baseline(size, repeats)
+            fast = {}  # threads -> float32 kernel record: infer() is compared with the same run's kernel
             for th in threads:
-                yield bench_fast(size, np.float32, th, repeats, work=work)
+                fast[th] = bench_fast(size, np.float32, th, repeats, work=work)
+                yield fast[th]
             top = max(threads)
             yield bench_fast(size, np.float64, top, repeats, work=work)
             yield bench_fast(size, np.float32, top, repeats, hidden=GENERAL_TABLE, method="crfmap-fast-general",
                              work=work)
             yield bench_fast(size, np.float32, top, repeats, bounded=True, method="crfmap-fast-bounded", work=work)
-            yield bench_infer(size, np.float32, top, repeats, work=work)
+            end_to_end = bench_infer(size, np.float32, top, repeats, work=work)
+            yield end_to_end
+            if goals:
+                yield G.infer_vs_kernel(fast[top], end_to_end)
             if size <= 512:
                 yield bench_plain(size, 1, top)
         elif kind == "converge":
@@ -279,6 +292,14 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             from crfmap.bench.external import run_external
 
             yield from run_external([s for s in sizes if s <= EXTERNAL_MAX_SIZE] or [min(sizes)], repeats, quick)
+        elif kind == "start":
+            yield from G.start_times(quick)
+        elif kind == "explorer":
+            yield from G.explorer_redraw(6 if quick else 36)
+        elif kind == "reproduce":
+            yield G.reproduce_record()
+        elif kind == "converge-start":
+            yield from G.converge_start(size, max(threads))
 
 
 def format_record(rec) -> str:

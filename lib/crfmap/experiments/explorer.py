@@ -10,6 +10,8 @@ iterations and bound, and draw truth / before / after / ROC. The notebook wires 
 - :func:`run`: LBP on the observation, with the metrics before and after.
 - :func:`draw` / :func:`explore`: the figure (a :class:`matplotlib.figure.Figure`, not a pyplot
   one, so a widget redrawing it many times leaks nothing).
+- :func:`warm_up`: compile (or load from numba's cache) every schedule's kernels on a tiny grid,
+  so the first switch to a schedule does not stall the panel (:mod:`crfmap.experiments.explorer_panel`).
 
 >>> ex = run("x", noise=0.42, seed=0)
 >>> bool(ex.after.mse < ex.before.mse)
@@ -27,7 +29,7 @@ from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.lbp import SCHEDULES, LBPResult, disc_region, infer
-from crfmap.assess.metrics import Report, auc, evaluate, roc_curve
+from crfmap.assess.metrics import Report, evaluate
 from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
 
 EXPLORER_SCENES = ("x", "occluded-train", "occluded-test", "enclosed-train", "enclosed-test",
@@ -37,6 +39,10 @@ OFFICE_SIZE = (8.0, 6.0)  # [m] width, height of the explorer's office: small en
 OFFICE_RESOLUTION = 0.1  # [m/cell]
 TO_CONVERGENCE = 1000  # iterations cap when "to convergence" is asked for
 TOLERANCE = 1e-5  # largest message change that counts as converged
+# the explorer's grids have a few thousand cells: one thread is as fast, and never waits at a
+# parallel barrier for a second core that other work is using (seen as 0.2-1 s stalls)
+THREADS = 1
+_WARMED = set()  # (schedule, bounded, kernel) that ran in this process: their kernels are compiled
 
 
 @dataclass
@@ -155,48 +161,75 @@ def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK
     max_iter = _check_iterations(iterations)
     radius = _check_radius(radius)
     region = None if radius is None else disc_region(ob.observed, ob.scene.start[:2], radius)
-    result = infer(ob.observed, hidden, link, schedule=schedule, max_iter=max_iter, tol=TOLERANCE, region=region)
+    result = infer(ob.observed, hidden, link, schedule=schedule, max_iter=max_iter, tol=TOLERANCE, region=region,
+                   threads=THREADS)
+    _WARMED.add((schedule, region is not None, result.kernel))
     truth = ob.scene.truth
     settings = {"scene": scene, "noise": ob.noise, "noise_kind": ob.noise_kind, "hidden": hidden.tolist(),
                 "link": link.tolist(), "schedule": schedule, "iterations": iterations, "radius": radius, "seed": seed}
     return Exploration(ob, result, evaluate(ob.observed, truth), evaluate(result.beliefs, truth), region, settings)
 
 
-def _fmt(table):
-    return "[" + ", ".join(f"{v:g}" for v in np.asarray(table).ravel()) + "]"
+def warmed() -> frozenset:
+    """(schedule, bounded, kernel) combinations whose LBP kernels already ran in this process."""
+    return frozenset(_WARMED)
+
+
+WARM_UP_SIZE = 48  # [cells] per side of the warm-up grid: big enough to take every kernel's code path
+
+
+def warm_up(schedules=SCHEDULES, on_schedule=None) -> dict:
+    """Compile (or load from numba's on-disk cache) every LBP kernel the explorer can call.
+
+    The first call of a numba kernel in a process compiles it (tens of seconds with an empty
+    cache) or loads it from the cache; doing that here, on a tiny grid, keeps a later switch of
+    the schedule control from stalling the panel and from counting compilation as run time.
+    Each schedule runs unbounded and bounded; the checkerboard also on the plain kernel (tables
+    the fast kernel cannot take fall back to it).
+
+    Parameters
+    ----------
+    schedules : schedules to warm up
+    on_schedule : callable(schedule, index, total) or None, called before each schedule
+
+    Returns
+    -------
+    dict
+        schedule -> seconds its warm-up took (compilation or cache loading, plus a few iterations)
+
+    >>> sorted(warm_up(["thesis"]))
+    ['thesis']
+    """
+    import time
+
+    rng = np.random.default_rng(0)
+    grid = OccupancyGrid(rng.uniform(0.05, 0.95, (WARM_UP_SIZE, WARM_UP_SIZE)), resolution=0.1)
+    inner = np.zeros(grid.shape, dtype=bool)
+    inner[WARM_UP_SIZE // 4:-WARM_UP_SIZE // 4, WARM_UP_SIZE // 4:-WARM_UP_SIZE // 4] = True
+    seconds = {}
+    for k, schedule in enumerate(schedules):
+        if on_schedule is not None:
+            on_schedule(schedule, k, len(schedules))
+        t0 = time.perf_counter()
+        kernels = ("auto", "plain") if schedule == "checkerboard" else ("auto",)
+        for kernel in kernels:
+            for region in (None, inner):
+                r = infer(grid, schedule=schedule, max_iter=2, tol=TOLERANCE, region=region, kernel=kernel,
+                          threads=THREADS)
+                _WARMED.add((schedule, region is not None, r.kernel))
+        seconds[schedule] = time.perf_counter() - t0
+    return seconds
 
 
 def draw(ex: Exploration):
-    """Truth, observed grid, grid after LBP (bound outlined) and both ROC curves, in one figure."""
-    from matplotlib.figure import Figure
+    """Truth, observed grid, grid after LBP (bound outlined) and both ROC curves, in one figure.
 
-    from crfmap.plotting import plot_roc, show_grid
+    An ordinary :class:`matplotlib.figure.Figure`; the live panel updates one figure in place
+    instead (:class:`crfmap.experiments.explorer_view.ExplorerView`).
+    """
+    from crfmap.experiments.explorer_view import ExplorerView
 
-    fig = Figure(figsize=(17, 4.4), layout="constrained")
-    axes = fig.subplots(1, 4, gridspec_kw={"width_ratios": [1, 1, 1, 1.05]})
-    truth = ex.truth
-    s = ex.settings
-    show_grid(axes[0], truth, f"truth: {s['scene']}", colorbar=False)  # one colour bar, on the last grid
-    show_grid(axes[1], ex.observation.observed, colorbar=False, title=
-              f"before LBP ({ex.observation.noise_kind} {ex.observation.noise:g})\nMSE {ex.before.mse:.4f}")
-    show_grid(axes[2], ex.result.beliefs,
-              f"after LBP: {ex.result.iterations} it., {'converged' if ex.result.converged else 'not converged'}"
-              f"\nMSE {ex.after.mse:.4f}")
-    if ex.region is not None:
-        axes[2].contour(ex.region.astype(float), levels=[0.5], colors="tab:red", linewidths=1.0,
-                        extent=truth.imshow_extent(), origin="lower")
-        sx, sy = ex.observation.scene.start[:2]
-        axes[2].plot([sx], [sy], marker="o", color="tab:red", markersize=4)
-    curves = {}
-    for label, grid in (("before", ex.observation.observed), ("after", ex.result.beliefs)):
-        fpr, tpr, _ = roc_curve(grid, truth)
-        curves[label] = (fpr, tpr, auc(grid, truth))
-    plot_roc(axes[3], curves, title="ROC (occupied = positive)")
-    bound = "unbounded" if s["radius"] is None else f"radius {s['radius']:g} m"
-    fig.suptitle(f"hidden {_fmt(s['hidden'])}, link {_fmt(s['link'])}, {s['schedule']}, "
-                 f"{'to convergence' if s['iterations'] is None else str(s['iterations']) + ' iterations'}, "
-                 f"{bound}, seed {s['seed']}", fontsize="medium")
-    return fig
+    return ExplorerView(live=False).update(ex).figure
 
 
 def explore(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",

@@ -1,0 +1,254 @@
+"""Speed as users feel it (issue 13): one record per goal, measured in the same run as the suite.
+
+- ``infer-vs-kernel``: :func:`crfmap.crf.lbp.infer` end to end (packing, iterations, beliefs,
+  unpacking) against its kernel's per-iteration throughput, same size, dtype and threads
+  (goal: ratio >= 0.8 at 2048², 4096², 8192²). Built from the suite's own ``crfmap-fast`` and
+  ``crfmap-infer`` records of that size, so both come from one run.
+- ``start-cold`` / ``start-warm`` / ``start-env``: wall time of ``crfmap infer`` on a 512² map in
+  a new process, with an empty numba cache, with that cache once warmed by the first run, and
+  with the environment's own cache as it is (what the next user call pays); goal: cold - warm
+  <= 2 s after the make targets have warmed the cache. Quick runs skip the empty cache.
+- ``explorer-redraw``: median seconds from a widget change to the new PNG in the explorer panel,
+  headless (real ``ipywidgets`` value changes, kernels warmed first; goal <= 0.3 s), with the
+  scene change apart (it re-lays the figure out).
+- ``reproduce``: the last ``make reproduce`` run's timing record
+  (``paper/generated/reproduce_timings.json``), or a record saying there is none (goal: <= 5
+  min from a fresh clone).
+- ``converge-start``: 4096² (quick: 256²) noisy office floor, table [[10, 1], [1, 10]], until the
+  largest message change is below 1e-4, from the plain (uniform) start and, when
+  :func:`crfmap.crf.lbp.infer` has one, from a coarse-to-fine start, with the largest belief
+  difference between the two (goal: <= 1 s).
+
+The coarse start is picked up by keyword: the first of :data:`COARSE_START_OPTIONS` whose
+keyword ``infer`` accepts and whose value it does not reject; ``crfmap bench`` then reports it as
+``start: <keyword>=<value>``. Today's ``infer`` has none of them (``start`` names the thesis
+schedule's corner and rejects ``"coarse"``), so the row says so.
+"""
+from __future__ import annotations
+
+import inspect
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from crfmap.bench.common import CONVERGE_TOL, bench_grid, record
+
+INFER_GOAL = 0.8  # end-to-end / kernel per-iteration throughput
+START_GOAL = 2.0  # [s] first `crfmap infer` minus a warm one
+REDRAW_GOAL = 0.3  # [s] explorer, widget change to new image
+REPRODUCE_GOAL = 300.0  # [s] make reproduce from a fresh clone
+CONVERGE_GOAL = 1.0  # [s] 4096² to max message change < 1e-4
+CONVERGE_GOAL_SIZE = 4096
+QUICK_CONVERGE_GOAL_SIZE = 256
+START_MAP_SIZE = 512  # [cells] per side of the map `crfmap infer` reads in the start rows
+# infer(..., **option) for a coarse-to-fine start, tried in this order (see the module docstring)
+COARSE_START_OPTIONS = ({"init": "coarse"}, {"start": "coarse"}, {"coarse_to_fine": True}, {"multiscale": True})
+# explorer widget changes timed, in this order (cycled): tables, link, schedule, iterations, bound, noise, seed
+REDRAW_CHANGES = (("h_oo", 8.0), ("h_ee", 8.0), ("l_oo", 0.8), ("schedule", "thesis"), ("iterations", "2"),
+                  ("schedule", "flooding"), ("radius", 1.5), ("schedule", "sweep"), ("iterations", "to convergence"),
+                  ("image_noise", 0.5), ("seed", 1), ("schedule", "checkerboard"), ("radius", 0.0),
+                  ("h_oo", 10.0), ("h_ee", 10.0), ("l_oo", 1.0), ("image_noise", 0.42), ("seed", 0))
+
+
+# --- end to end against the kernel --------------------------------------------------------------------
+
+
+def infer_vs_kernel(kernel: dict, end_to_end: dict) -> dict:
+    """Ratio of a ``crfmap-infer`` record's throughput to its ``crfmap-fast`` record's (same run)."""
+    ratio = end_to_end["mcells_per_second"] / kernel["mcells_per_second"]
+    return record("infer-vs-kernel", kernel["size"], kernel["dtype"], kernel["threads"], None,
+                  kernel_mcells_per_second=kernel["mcells_per_second"],
+                  infer_mcells_per_second=end_to_end["mcells_per_second"], ratio=ratio, goal=INFER_GOAL,
+                  iterations_per_call=end_to_end.get("iterations_timed"),
+                  note=f"infer() end to end over its kernel per iteration, {end_to_end.get('iterations_timed')} "
+                  "iterations per call (packing and unpacking spread over them)")
+
+
+# --- cold and warm start ------------------------------------------------------------------------------
+
+
+def _crfmap_command():
+    script = Path(sys.executable).with_name("crfmap")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "crfmap.cli"]
+
+
+def _time_infer(folder, cache):
+    env = dict(os.environ)
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(cache)
+    out = Path(folder) / "beliefs.npy"
+    t = time.perf_counter()
+    done = subprocess.run(_crfmap_command() + ["infer", str(Path(folder) / "map.npy"), str(out)],
+                          capture_output=True, text=True, env=env)
+    seconds = time.perf_counter() - t
+    if done.returncode != 0:
+        raise RuntimeError(f"crfmap infer failed: {done.stderr.strip().splitlines()[-1:]}")
+    return seconds
+
+
+def start_times(quick=False) -> list:
+    """``crfmap infer`` in a new process: empty cache (not quick), warmed cache, environment's cache."""
+    out = []
+    with tempfile.TemporaryDirectory() as folder:
+        np.save(Path(folder) / "map.npy", bench_grid(START_MAP_SIZE, kind="office"))
+        common = dict(map_size=START_MAP_SIZE, command="crfmap infer map.npy beliefs.npy")
+        env_seconds = _time_infer(folder, None)
+        if quick:  # compiling every kernel takes a minute: the environment's cache, now warm, stands in
+            cold, warm = None, _time_infer(folder, None)
+        else:
+            cache = Path(folder) / "numba-cache"
+            cache.mkdir()
+            cold = _time_infer(folder, cache)
+            warm = _time_infer(folder, cache)
+    if cold is not None:
+        out.append(record("start-cold", START_MAP_SIZE, None, None, None, seconds=cold, cache="empty",
+                          minus_warm_seconds=cold - warm, goal_seconds=START_GOAL, **common))
+    else:
+        out.append(record("start-cold", START_MAP_SIZE, None, None, None, seconds=None, cache="empty",
+                          note="skipped in quick runs (compiling every kernel takes about a minute)", **common))
+    out.append(record("start-warm", START_MAP_SIZE, None, None, None, seconds=warm,
+                      cache="the environment's, after the first run" if quick else "the empty one, after the first run",
+                      **common))
+    out.append(record("start-env", START_MAP_SIZE, None, None, None, seconds=env_seconds,
+                      cache=os.environ.get("NUMBA_CACHE_DIR", "numba's default (__pycache__ beside the modules)"),
+                      minus_warm_seconds=env_seconds - warm, **common,
+                      note="the environment's cache as this run found it: what the next call of crfmap infer pays"))
+    return out
+
+
+# --- explorer -----------------------------------------------------------------------------------------
+
+
+def explorer_redraw(changes=12) -> list:
+    """Median time from a widget change to the new PNG, headless, over ``changes`` changes."""
+    from crfmap.experiments.explorer_panel import ExplorerPanel
+
+    panel = ExplorerPanel()
+    t = time.perf_counter()
+    panel.warm_up()
+    warm_up = time.perf_counter() - t
+    panel.redraw()
+    c = panel.controls
+    first = len(panel.timings)
+    for k in range(changes):
+        name, value = REDRAW_CHANGES[k % len(REDRAW_CHANGES)]
+        c[name].value = value
+    timed = panel.timings[first:]
+    for scene in ("office", "x"):
+        c["scene"].value = scene
+    scene_changes = panel.timings[-2:]
+
+    def med(key, rows):
+        return float(np.median([r[key] for r in rows]))
+
+    # the way it was drawn before (a new figure per change, laid out and fully drawn): same run, for the ratio
+    from crfmap.experiments import explorer
+    from crfmap.experiments.explorer_view import ExplorerView
+
+    ex = explorer.run()
+    full = []
+    for _ in range(3):
+        t = time.perf_counter()
+        ExplorerView(live=False).update(ex).png()
+        full.append(time.perf_counter() - t)
+
+    rec = record("explorer-redraw", None, None, explorer.THREADS, None, seconds=med("seconds", timed),
+                 changes=len(timed),
+                 max_seconds=float(max(r["seconds"] for r in timed)), lbp_seconds=med("lbp_seconds", timed),
+                 run_seconds=med("run_seconds", timed), draw_seconds=med("draw_seconds", timed),
+                 compiled_during_changes=sum(r["compiled"] for r in timed), warm_up_seconds=warm_up,
+                 full_redraw_seconds=float(np.median(full)),
+                 goal_seconds=REDRAW_GOAL,
+                 note="median over widget changes (tables, link, schedule, iterations, bound, noise, seed) on the X; "
+                 "run = observation + LBP + metrics, draw = in-place figure update + PNG; full_redraw = a new "
+                 "figure laid out, drawn and encoded (how every change was drawn before)")
+    scene = record("explorer-scene-change", None, None, None, None, seconds=med("seconds", scene_changes),
+                   draw_seconds=med("draw_seconds", scene_changes),
+                   note="X -> office -> X (observations cached): the figure is laid out again")
+    return [rec, scene]
+
+
+# --- make reproduce -----------------------------------------------------------------------------------
+
+
+def reproduce_record(path=None) -> dict:
+    """The last ``make reproduce`` run's timings (``paper/generated/reproduce_timings.json``), if any."""
+    from crfmap import paths
+
+    path = Path(path or paths.GENERATED / "reproduce_timings.json")
+    if not path.exists():
+        return record("reproduce", None, None, None, None, seconds=None, goal_seconds=REPRODUCE_GOAL,
+                      note=f"no timing record ({path.name} not found): run `make reproduce` first")
+    data = json.loads(path.read_text())
+    notebooks = data.get("seconds") or {}
+    slowest = max(notebooks, key=notebooks.get) if notebooks else None
+    extra = {k: v for k, v in data.items() if k not in ("seconds", "total_seconds")}
+    return record("reproduce", None, None, None, None, seconds=data.get("total_seconds"), goal_seconds=REPRODUCE_GOAL,
+                  notebook_seconds=notebooks, slowest=slowest, recorded=time.strftime(
+                      "%Y-%m-%d %H:%M UTC", time.gmtime(path.stat().st_mtime)), **{f"record_{k}": v for k, v in
+                                                                                   extra.items()},
+                  note="read from the last make reproduce run, not measured here")
+
+
+# --- convergence --------------------------------------------------------------------------------------
+
+
+def coarse_start_option():
+    """The keyword arguments of :func:`crfmap.crf.lbp.infer`'s coarse-to-fine start, or None.
+
+    An option counts when ``infer`` takes the keyword, accepts the value and its first iteration
+    then differs from the uniform start's (``start`` exists for the thesis schedule's corner and
+    the checkerboard ignores it).
+    """
+    from crfmap.crf.lbp import infer
+    from crfmap.errors import InputError
+
+    accepted = inspect.signature(infer).parameters
+    probe = bench_grid(32, kind="office")
+    uniform = infer(probe, max_iter=1, tol=0.0).beliefs.probability
+    for option in COARSE_START_OPTIONS:
+        if not set(option) <= set(accepted):
+            continue
+        try:
+            beliefs = infer(probe, max_iter=1, tol=0.0, **option).beliefs.probability
+        except (InputError, ValueError, TypeError):
+            continue
+        if not np.array_equal(beliefs, uniform):
+            return option
+    return None
+
+
+def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000) -> list:
+    """Time and iterations to convergence from the plain start and (when infer has one) a coarse one."""
+    from crfmap.crf.lbp import infer
+
+    obs = bench_grid(size, kind="office")
+    runs = {"uniform": {}}
+    option = coarse_start_option()
+    if option is not None:
+        runs[", ".join(f"{k}={v}" for k, v in option.items())] = option
+    results = {}
+    for name, kwargs in runs.items():
+        # the better of two runs: the first also compiles (or loads) whatever kernels this size takes
+        results[name] = min((infer(obs, tol=tol, max_iter=max_iter, dtype=np.float32, threads=threads, **kwargs)
+                             for _ in range(2)), key=lambda r: r.seconds)
+    plain = results["uniform"]
+    out = []
+    for name, r in results.items():
+        out.append(record("converge-start", size, np.float32, threads, r.seconds / max(r.iterations, 1),
+                          start=name, iterations=r.iterations, seconds_to_converge=r.seconds, converged=r.converged,
+                          tol=tol, goal_seconds=CONVERGE_GOAL,
+                          max_belief_difference_vs_uniform=float(np.abs(r.beliefs.probability
+                                                                        - plain.beliefs.probability).max()),
+                          note="noisy office floor, [[10, 1], [1, 10]]"))
+    if option is None:
+        out.append(record("converge-start", size, np.float32, threads, None, start="coarse", iterations=None,
+                          seconds_to_converge=None, note="infer() has no coarse-to-fine start yet (looked for "
+                          + ", ".join(f"{k}={v!r}" for o in COARSE_START_OPTIONS for k, v in o.items()) + ")"))
+    return out
