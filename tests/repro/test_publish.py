@@ -108,7 +108,7 @@ def test_publish_builds_pdf_and_html_with_every_figure_and_nothing_remote(out):
     template.write_text("# A title\n\nMSE {{number:demo.mse|.3f}}.\n\n{{table:table_demo}}\n\n"
                         + "\n\n".join(f"{{{{figure:fig_demo{k}|Fig. {k}: a demo grid number {k}}}}}" for k in range(3))
                         + "\n\n---\n")
-    md = paper.build_paper(template, out / "paper" / "generated" / "paper.md")
+    md = paper.build_paper(template, out / "paper" / "generated" / "paper.md", strict=False)  # demo results come from no notebook
     pdf, html, typ = md.with_suffix(".pdf"), md.with_suffix(".html"), md.with_suffix(".typ")
     assert pdf.read_bytes().startswith(b"%PDF") and pdf_image_count(pdf) == 3
     page = html.read_text()
