@@ -10,6 +10,7 @@ import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 
 import crfmap
@@ -27,9 +28,11 @@ def _read_only_install(tmp_path, with_fallback=True):
         (folder / "__pycache__").write_text("not a folder")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_CACHE_DIR", "XDG_CACHE_HOME"))}
     (tmp_path / "tmp").mkdir()
-    env.update(PYTHONPATH=str(site), HOME="/proc/no-such-home", TMPDIR=str(tmp_path / "tmp"),
+    # -S: no .pth files, so a venv's own NUMBA_CACHE_DIR default (make venv writes one) does not hide the case
+    packages = {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}
+    env.update(PYTHONPATH=os.pathsep.join([str(site), *sorted(packages)]), HOME="/proc/no-such-home", TMPDIR=str(tmp_path / "tmp"),
                PYTHONDONTWRITEBYTECODE="1")
-    return subprocess.run([sys.executable, "-c", CALL], env=env, cwd=tmp_path, capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-S", "-c", CALL], env=env, cwd=tmp_path, capture_output=True, text=True,
                           timeout=300)
 
 

@@ -357,7 +357,7 @@ def _(d):
 @case("ros2", "db3-garbage")
 def _(d):
     p = good_bag(d)
-    for f in p.glob("*.db3"):
+    for f in [*p.glob("*.db3"), *p.glob("*.mcap")]:
         f.write_bytes(os.urandom(4096))
     return cli("build", p, Path(d) / "out.npy", names=["bag"])
 
@@ -365,7 +365,7 @@ def _(d):
 @case("ros2", "db3-missing")
 def _(d):
     p = good_bag(d)
-    for f in p.glob("*.db3"):
+    for f in [*p.glob("*.db3"), *p.glob("*.mcap")]:
         f.unlink()
     return cli("build", p, Path(d) / "out.npy", names=["bag"])
 

@@ -34,7 +34,7 @@ def test_build_infer_and_convert_twice_are_byte_identical(tmp_path, capsys):
     src = good_npy(tmp_path)
     for argv, outs in [
         (lambda d: ["build", str(log), str(d / "m.npy")], lambda d: [d / "m.npy", d / "m.npy.yaml"]),
-        (lambda d: ["build", str(log), str(d / "m.yaml")], lambda d: [d / "m.yaml", d / "m.png"]),
+        (lambda d: ["build", str(log), str(d / "m.yaml")], lambda d: [d / "m.yaml", d / "m.pgm"]),
         (lambda d: ["infer", str(src), str(d / "o.yaml"), "--mode", "trinary"], lambda d: [d / "o.yaml", d / "o.pgm"]),
         (lambda d: ["convert", str(log), str(d / "b.bag")], lambda d: [d / "b.bag"]),
         (lambda d: ["convert", str(log), str(d / "b2")], lambda d: [d / "b2"]),

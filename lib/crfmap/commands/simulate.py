@@ -79,7 +79,8 @@ def check_options(args):
     for flag, value in (("--range-noise", args.range_noise), ("--range-sigma", args.range_sigma),
                         ("--odom-noise", args.odom_noise), ("--odom-yaw-noise", args.odom_yaw_noise)):
         check_number(flag, value, low=0.0)
-    check_int("--stride", args.stride, low=1)
+    if args.stride is not None:
+        check_int("--stride", args.stride, low=1)
     check_int("--seed", args.seed, low=0)
     if args.scene_seed is not None:
         check_int("--scene-seed", args.scene_seed, low=0)

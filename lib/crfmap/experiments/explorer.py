@@ -237,8 +237,8 @@ def explore(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_
     """:func:`run` then :func:`draw`: the explorer's figure for one setting.
 
     >>> fig = explore("x", iterations=2, schedule="thesis")
-    >>> len(fig.axes)  # truth, before, after (with the colour bar), ROC
-    5
+    >>> len(fig.axes)  # truth, before, after, ROC
+    4
     """
     return draw(run(scene, noise, hidden, link, schedule, iterations, radius, seed))
 

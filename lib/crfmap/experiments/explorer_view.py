@@ -81,12 +81,14 @@ class ExplorerView:
     def _build(self):
         from matplotlib.patches import Circle
 
+        from crfmap.plotting import OCCUPANCY_CMAP
+
         fig = self.figure
         axes = fig.subplots(1, 4, gridspec_kw={"width_ratios": [1, 1, 1, 1.05]})
         a = self._artists
         blank = np.full((2, 2), 0.5)
         for ax, name in zip(axes[:3], ("truth", "before", "after")):
-            a[name] = ax.imshow(blank, cmap="gray_r", vmin=0.0, vmax=1.0, origin="lower", interpolation="nearest")
+            a[name] = ax.imshow(blank, cmap=OCCUPANCY_CMAP, vmin=0.0, vmax=1.0, origin="lower", interpolation="nearest")
             a[name + "_title"] = ax.set_title(" \n ")
             ax.set_xlabel("x [m]")
             ax.set_ylabel("y [m]")
