@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
+from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages
 from crfmap.crf.packed import PackedBlock, fast_tables_ok
 from crfmap.errors import InputError
 from crfmap.crf.regions import disc_region, near_known  # noqa: F401  (re-exported)
@@ -240,6 +241,9 @@ def infer(
         if active.shape != shape:
             raise InputError("region", f"mask shape {active.shape} does not match the grid {shape}")
         active = active.astype(np.bool_, copy=False)
+    # hard evidence: certain cells are clamped (never updated, sending what their state implies)
+    states = certain_states(g.probability, link, tables, active)
+    senders = active if states is None else (states < 0 if active is None else active & (states < 0))
 
     import numba
 
@@ -249,11 +253,14 @@ def infer(
     try:
         t0 = time.perf_counter()
         if use_fast:
-            out = _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, n_threads, block, freeze)
+            out = _infer_fast(g, tables, link, max_iter, tol, senders, messages, dtype, n_threads, block, freeze,
+                              (states, active))
         else:
-            out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing,
-                               dtype, start)
+            out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, senders, messages, pairing,
+                               dtype, start, (states, active))
         beliefs, msg, changes = out
+        if states is not None:
+            clamp_beliefs(states, beliefs)
         seconds = time.perf_counter() - t0
     finally:
         numba.set_num_threads(previous_threads)
@@ -296,8 +303,11 @@ def run_packed(packed, max_iter, tol, threads, block=DEFAULT_BLOCK, freeze=None,
     return packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if warm else block)
 
 
-def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze):
-    """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes)."""
+def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze, clamped):
+    """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes).
+
+    ``active``: the senders; ``clamped``: (certain states or None, the region or None).
+    """
     shape = g.shape
     prob = np.ascontiguousarray(g.probability, dtype=np.float64)
     if active is None:
@@ -312,6 +322,8 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
         return beliefs, msg, changes
     # Bounded: only the bounding box of the region plus a one-cell halo (the receivers) is packed.
     msg = initial_messages(shape, dtype) if messages is None else _floored(messages, dtype, shape)
+    if clamped[0] is not None:
+        clamp_messages(clamped[0], tables, msg, clamped[1])
     rows = np.flatnonzero(active.any(axis=1))
     changes = []
     if rows.size:
@@ -339,12 +351,20 @@ def _floored(messages, dtype, shape):
     return msg
 
 
-def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing, dtype, start):
-    """The reference kernels of :mod:`crfmap.crf._lbp_kernels`; returns (beliefs, messages, changes)."""
+def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing, dtype, start, clamped):
+    """The reference kernels of :mod:`crfmap.crf._lbp_kernels`; returns (beliefs, messages, changes).
+
+    ``active``: the senders; ``clamped``: (certain states or None, the region or None).
+    """
     shape = g.shape
     unary = np.clip(link_unary(g.probability, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR).astype(dtype)
-    coef = message_coefficients(directional_tables(hidden, pairing)).astype(dtype)
+    tables = directional_tables(hidden, pairing)
+    coef = message_coefficients(tables).astype(dtype)
     msg = initial_messages(shape, dtype) if messages is None else _floored(messages, dtype, shape)
+    if clamped[0] is not None:
+        clamp_messages(clamped[0], tables, msg, clamped[1])
+    # the thesis's walk visits the region (clamped cells included); only ``active`` cells send
+    walk = clamped[1]
     if active is None:
         active = np.ones((1, 1), dtype=np.bool_)
         use_active = False
@@ -364,8 +384,10 @@ def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, mess
         if start not in corner:
             raise InputError("start", f"must be one of {', '.join(corner)}, got {start!r}")
         sy, sx = corner[start]
-        if use_active and not active[sy, sx]:
-            cells = np.argwhere(active)
+        use_walk = walk is not None
+        walk = walk if use_walk else np.ones((1, 1), np.bool_)
+        if use_walk and not walk[sy, sx]:
+            cells = np.argwhere(walk)
             if cells.size:
                 sy, sx = (int(v) for v in cells[0])
     for _ in range(max_iter):
@@ -378,7 +400,7 @@ def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, mess
         elif schedule == "sweep":
             c = K._sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
         else:
-            order = K._bfs_order(shape[0], shape[1], active, use_active, sy, sx)
+            order = K._bfs_order(shape[0], shape[1], walk, use_walk, sy, sx)
             c = K._pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)
             if order.size:  # the next pass starts where this one ended (sec. 2.6.2)
                 sy, sx = divmod(int(order[-1]), shape[1])
