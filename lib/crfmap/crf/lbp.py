@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
+from crfmap.crf.compiling import announce_lbp
 from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages
 from crfmap.crf.packed import PackedBlock, fast_tables_ok
 from crfmap.errors import InputError
@@ -249,6 +250,7 @@ def infer(
 
     previous_threads = numba.get_num_threads()
     n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    announce_lbp(use_fast, schedule, g.probability.size, n_threads)
     numba.set_num_threads(n_threads)
     try:
         t0 = time.perf_counter()

@@ -1,0 +1,55 @@
+"""Say so when a call is about to compile numba kernels (an empty cache: tens of seconds of silence otherwise).
+
+A dispatcher needs compiling when it has no compiled signature in this process and numba's
+on-disk cache holds no entry for its current source. Checking costs one small file read per
+dispatcher, once per process.
+
+>>> from crfmap.crf import _lbp_kernels as K
+>>> isinstance(needs_compiling(K._beliefs), bool)
+True
+"""
+from __future__ import annotations
+
+import sys
+
+MESSAGE = "compiling LBP kernels (first run only)..."
+_checked = set()  # dispatchers known to be compiled or cached in this process
+
+
+def needs_compiling(dispatcher) -> bool:
+    """Whether calling ``dispatcher`` will compile it (not compiled here, nothing in the disk cache)."""
+    if dispatcher.signatures or id(dispatcher) in _checked:
+        return False
+    try:  # numba's cache index: empty when missing or written for another version of the source
+        cached = bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # no cache (cache=False, no locator) or another numba layout: assume a compile
+        cached = False
+    if cached:
+        _checked.add(id(dispatcher))
+    return not cached
+
+
+def announce(*dispatchers, stream=None) -> bool:
+    """Print :data:`MESSAGE` (one line, stderr) if any of ``dispatchers`` will compile; returns whether it did."""
+    if not any([needs_compiling(d) for d in dispatchers]):
+        return False
+    print(MESSAGE, file=stream or sys.stderr, flush=True)
+    return True
+
+
+def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1) -> bool:
+    """:func:`announce` for the kernels one :func:`crfmap.crf.lbp.infer` call on ``cells`` cells runs."""
+    from crfmap.crf import _lbp_fast as F
+    from crfmap.crf import _lbp_kernels as K
+    from crfmap.crf import packed as P
+
+    if fast:
+        kernels = (P._pack_unary, P._pack_messages, P._unpack_messages, P._beliefs_packed, F._pass_serial,
+                   F._tile_max, K._beliefs)
+        if cells >= P.SERIAL_CELLS and threads > 1:  # smaller blocks run on one thread only
+            kernels += (F._pass_parallel,)
+    else:
+        kernels = {"checkerboard": (K._checkerboard_iteration,), "flooding": (K._flooding_iteration,),
+                   "sweep": (K._sweep_iteration,), "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
+        kernels += (K._beliefs,)
+    return announce(*kernels)
