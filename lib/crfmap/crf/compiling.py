@@ -14,6 +14,7 @@ import sys
 
 MESSAGE = "compiling LBP kernels (first run only)..."
 _checked = set()  # dispatchers known to be compiled or cached in this process
+_announced = set()  # (fast, schedule, parallel) calls already announced
 
 
 def needs_compiling(dispatcher) -> bool:
@@ -43,13 +44,17 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1) ->
     from crfmap.crf import _lbp_kernels as K
     from crfmap.crf import packed as P
 
-    if fast:
-        kernels = (P._pack_unary, P._pack_messages, P._unpack_messages, P._beliefs_packed, F._pass_serial,
-                   F._tile_max, K._beliefs)
-        if cells >= P.SERIAL_CELLS and threads > 1:  # smaller blocks run on one thread only
-            kernels += (F._pass_parallel,)
+    key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1)
+    if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
+        return False  # uncompiled: say it once per process, not on every call
+    if fast:  # the kernels every such call runs
+        kernels = (P._fill_ones, P._pack_unary, P._beliefs_packed, F._tile_max)
+        kernels += (F._pass_parallel,) if key[2] else (F._pass_serial,)
     else:
         kernels = {"checkerboard": (K._checkerboard_iteration,), "flooding": (K._flooding_iteration,),
                    "sweep": (K._sweep_iteration,), "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
         kernels += (K._beliefs,)
-    return announce(*kernels)
+    said = announce(*kernels)
+    if said:
+        _announced.add(key)
+    return said

@@ -83,13 +83,12 @@ def _unpack_messages(packed, y0, x0, h, w, act, use_act, out):
 def _beliefs_packed(un, packed, h, w, out):
     """P(occupied) of every cell of the block: observation odds times its four message odds."""
     for y in prange(h):
-        for x in range(w):
-            c = (x + y) & 1
-            k = (x >> 1) + 1
-            b = float(un[c, y + 1, k])
-            for d in range(4):
-                b *= float(packed[c, d, y + 1, k])
-            out[y, x] = b / (1.0 + b)
+        for c in range(2):  # colour by colour: unit-stride reads
+            off = (y + c) & 1
+            for k in range(1, ((w - off + 1) >> 1) + 1):
+                b = float(un[c, y + 1, k]) * float(packed[c, 0, y + 1, k]) * float(packed[c, 1, y + 1, k])
+                b = b * float(packed[c, 2, y + 1, k]) * float(packed[c, 3, y + 1, k])
+                out[y, 2 * k - 2 + off] = b / (1.0 + b)
 
 
 @njit(cache=True)
@@ -108,6 +107,14 @@ def _active_extents(act, h, w, lo_k, hi_k):
                     hi = k + 1
             lo_k[c, y] = lo if hi > 0 else 0
             hi_k[c, y] = hi
+
+
+@njit(parallel=True, cache=True)
+def _fill_ones(planes):
+    """planes[...] = 1 over the last two axes in parallel (first touch of fresh memory on every thread)."""
+    flat = planes.reshape(-1, planes.shape[-2], planes.shape[-1])
+    for i in prange(flat.shape[0] * flat.shape[1]):
+        flat[i // flat.shape[1], i % flat.shape[1], :] = 1
 
 
 @njit(parallel=True, cache=True)
@@ -182,8 +189,10 @@ class PackedBlock:
         self.h, self.w = int(h), int(w)
         self.dtype = np.dtype(dtype)
         wp = plane_width(self.w)
-        self.msg = np.ones((2, 4, self.h + 2, wp), self.dtype)
-        self.un = np.ones((2, self.h + 2, wp), self.dtype)
+        self.msg = np.empty((2, 4, self.h + 2, wp), self.dtype)
+        self.un = np.empty((2, self.h + 2, wp), self.dtype)
+        _fill_ones(self.msg)
+        _fill_ones(self.un)
         self.co = odds_coefficients(tables, self.dtype, floor)
         self.floor = float(floor)
         self.lo = self.dtype.type(floor / (1.0 - floor))
