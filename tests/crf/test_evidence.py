@@ -96,3 +96,13 @@ def test_certain_state_with_an_all_zero_column_is_an_error():
     # the same cell at the west end is possible (it only forces its east neighbour empty)
     r = infer(grid[:, ::-1], table, pairing="oriented")
     assert r.beliefs.probability.tolist() == [[1.0, 0.0]]
+
+
+@pytest.mark.parametrize("kernel", ["auto", "plain"])
+def test_no_iteration_sends_nothing_but_certain_beliefs_are_exact(kernel):
+    grid = np.array([[1.0, 0.3, 0.0, 0.6]])
+    r = infer(grid, [[10, 1], [1, 10]], max_iter=0, kernel=kernel)
+    assert r.iterations == 0
+    np.testing.assert_allclose(r.beliefs.probability, grid, atol=1e-12)
+    assert r.beliefs.probability[0, 0] == 1.0 and r.beliefs.probability[0, 2] == 0.0
+    np.testing.assert_array_equal(r.messages, 0.5)

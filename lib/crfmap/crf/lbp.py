@@ -42,7 +42,7 @@ import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
 from crfmap.crf.compiling import announce_lbp
-from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages
+from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages, implied_messages
 from crfmap.crf.messages import check_messages, floored, initial_messages
 from crfmap.crf.packed import PackedBlock, fast_tables_ok
 from crfmap.errors import InputError
@@ -255,7 +255,8 @@ def infer(
         active = active.astype(np.bool_, copy=False)
     # hard evidence: certain cells are clamped (never updated, sending what their state implies)
     states = certain_states(g.probability, link, tables, active)
-    senders = active if states is None else (states < 0 if active is None else active & (states < 0))
+    sending = states if max_iter else None  # clamped cells send from the first iteration on
+    senders = active if sending is None else (sending < 0 if active is None else active & (sending < 0))
 
     import numba
 
@@ -266,11 +267,11 @@ def infer(
     try:
         t0 = time.perf_counter()
         if use_fast:
-            out = _infer_fast(g, tables, link, max_iter, tol, senders, messages, dtype, n_threads, block, freeze,
-                              (states, active))
+            out = _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, n_threads, block, freeze,
+                              sending)
         else:
             out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, senders, messages, pairing,
-                               dtype, start, (states, active))
+                               dtype, start, (sending, active))
         beliefs, msg, changes = out[:3]
         if states is not None:
             clamp_beliefs(states, beliefs)
@@ -306,10 +307,10 @@ def run_packed(packed, max_iter, tol, threads, block=DEFAULT_BLOCK, freeze=None,
     return packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if warm else block)
 
 
-def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze, clamped):
+def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze, states):
     """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes).
 
-    ``active``: the senders; ``clamped``: (certain states or None, the region or None).
+    ``active``: the region or None; ``states``: the certain cells (:mod:`crfmap.crf.evidence`) or None.
     """
     shape = g.shape
     prob = np.ascontiguousarray(g.probability, dtype=np.float64)
@@ -319,18 +320,24 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
         packed.set_unary(prob, link)
         if messages is not None:
             packed.set_messages(np.ascontiguousarray(messages))
+        if states is not None:
+            packed.clamp(states, implied_messages(tables))
         t.append(time.perf_counter())
-        changes = run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
+        changes = (run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
+                   if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
         t.append(time.perf_counter())
         beliefs = packed.beliefs()
         packed.un = None  # the result keeps only the packed messages
-        msg = lambda: packed.messages(np.empty((4,) + shape, dtype))  # noqa: E731  (unpacked when read)
+        # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
+        msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731
+                                      clamp_messages(states, tables, initial_messages(shape, dtype)))
         t.append(time.perf_counter())
         return beliefs, msg, changes, dict(zip(("pack", "iterate", "unpack"), np.diff(t).tolist()))
     # Bounded: only the bounding box of the region plus a one-cell halo (the receivers) is packed.
     msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, MESSAGE_FLOOR)
-    if clamped[0] is not None:
-        clamp_messages(clamped[0], tables, msg, clamped[1])
+    if states is not None:
+        clamp_messages(states, tables, msg, active)
+        active = active & (states < 0)
     rows = np.flatnonzero(active.any(axis=1))
     changes = []
     if rows.size:

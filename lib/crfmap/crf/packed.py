@@ -118,6 +118,27 @@ def _fill_ones(planes):
 
 
 @njit(parallel=True, cache=True)
+def _pack_clamped(state, implied_odds, msg, act):
+    """Cells with ``state`` >= 0 (certain) stop sending (``act`` 0) and their four messages become
+    ``implied_odds[d, state]``; the others send (``act`` 1). Whole grid, as :func:`crfmap.crf.evidence.clamp_messages`."""
+    h, w = state.shape
+    for y in prange(h):
+        for x in range(w):
+            s = state[y, x]
+            act[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if s < 0 else 0
+            if s < 0:
+                continue
+            if x + 1 < w:
+                msg[(x + 1 + y) & 1, 0, y + 1, ((x + 1) >> 1) + 1] = implied_odds[0, s]
+            if x > 0:
+                msg[(x - 1 + y) & 1, 1, y + 1, ((x - 1) >> 1) + 1] = implied_odds[1, s]
+            if y + 1 < h:
+                msg[(x + y + 1) & 1, 2, y + 2, (x >> 1) + 1] = implied_odds[2, s]
+            if y > 0:
+                msg[(x + y - 1) & 1, 3, y, (x >> 1) + 1] = implied_odds[3, s]
+
+
+@njit(parallel=True, cache=True)
 def _pack_mask(mask, y0, x0, h, w, out):
     for y in prange(h):
         for x in range(w):
@@ -231,6 +252,16 @@ class PackedBlock:
         self.hi_k = np.zeros((2, self.h), np.int64)
         _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
         self._extents_changed()
+
+    def clamp(self, state, implied):
+        """Whole-grid block: certain cells (``state`` >= 0) send ``implied[d, state]`` (probabilities) for ever.
+
+        Call after :meth:`set_messages`; see :mod:`crfmap.crf.evidence`.
+        """
+        p = np.clip(np.asarray(implied, np.float64), self.floor, 1.0 - self.floor)
+        act = np.empty(self.un.shape, np.uint8)
+        _pack_clamped(state, (p / (1.0 - p)).astype(self.dtype), self.msg, act)
+        self.set_packed_mask(act)
 
     def set_packed_mask(self, act):
         """Only cells whose entry of ``act`` (red/black planes, shape of ``un``) is non-zero send.
