@@ -124,12 +124,17 @@ def test_message_of_table_1():
 
 def test_hard_evidence_and_hard_tables_give_no_nan():
     obs = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 1.0], [0.5, 1.0, 0.0]])
+    consistent = np.array([[0.5, 0.9, 0.5], [0.2, 0.5, 1.0], [0.5, 0.7, 0.5]])
     for hidden in ([[1, 0], [0, 1]], [[10, 1], [1, 10]], [[1, 1], [0, 1]]):
         for dtype in (np.float32, np.float64):
             for s in SCHEDULES:
-                r = infer(obs, hidden, schedule=s, max_iter=50, dtype=dtype)
-                b = r.beliefs.probability
-                assert np.all(np.isfinite(b)) and b.min() >= 0 and b.max() <= 1
+                for grid in (obs, consistent):
+                    if grid is obs and hidden[1][0] == 0:  # certain 1 next to certain 0 under a zero entry
+                        with pytest.raises(InputError, match="contradictory hard evidence"):
+                            infer(grid, hidden, schedule=s, max_iter=50, dtype=dtype)
+                        continue
+                    b = infer(grid, hidden, schedule=s, max_iter=50, dtype=dtype).beliefs.probability
+                    assert np.all(np.isfinite(b)) and b.min() >= 0 and b.max() <= 1
 
 
 def test_large_grid_no_underflow_and_float32_close_to_float64():

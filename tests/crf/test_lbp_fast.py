@@ -201,3 +201,14 @@ def test_flooding_and_damping_still_run_on_the_plain_kernels():
     assert infer(obs, schedule="flooding", max_iter=3).kernel == "plain"
     assert infer(obs, damping=0.3, max_iter=3).kernel == "plain"
     assert infer(obs, max_iter=3).kernel == "fast"
+
+
+def test_timings_and_messages_unpacked_on_first_read():
+    obs = np.random.default_rng(5).uniform(0.1, 0.9, (33, 47))
+    fast = infer(obs, max_iter=12, tol=0.0, kernel="fast")
+    plain = infer(obs, max_iter=12, tol=0.0, kernel="plain")
+    assert set(fast.timings) == {"pack", "iterate", "unpack"} and all(v >= 0 for v in fast.timings.values())
+    assert plain.timings == {}
+    assert callable(fast.__dict__["_messages"])  # not unpacked yet
+    np.testing.assert_allclose(fast.messages, plain.messages, atol=1e-12)
+    assert fast.messages is fast.messages  # unpacked once

@@ -40,15 +40,17 @@ def test_iterations_and_schedule_are_passed_on():
     ex = explorer.run("x", 0.42, schedule="thesis", iterations=2)
     assert ex.result.iterations == 2 and ex.result.schedule == "thesis"
     none = explorer.run("x", 0.42, iterations=0)
-    # no LBP: the beliefs are the observations (clipped to the message floor)
-    expected = np.clip(none.observation.observed.probability, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)
+    # no LBP: the beliefs are the observations (clipped to the message floor; hard evidence, P = 0 or 1, exact)
+    p = none.observation.observed.probability
+    expected = np.where((p == 0) | (p == 1), p, np.clip(p, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR))
     assert np.allclose(none.result.beliefs.probability, expected, atol=1e-12)
 
 
 def test_tables_change_the_result():
     weak = explorer.run("x", 0.42, hidden=[[1.0, 1.0], [1.0, 1.0]])  # no coupling: LBP changes nothing
+    p = weak.observation.observed.probability  # hard evidence (P = 0 or 1) stays exact
     assert np.allclose(weak.result.beliefs.probability,
-                       np.clip(weak.observation.observed.probability, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR))
+                       np.where((p == 0) | (p == 1), p, np.clip(p, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)))
     strong = explorer.run("x", 0.42, hidden=[[10.0, 1.0], [1.0, 10.0]])
     assert not np.allclose(strong.result.beliefs.probability, weak.result.beliefs.probability)
 
@@ -64,7 +66,8 @@ def test_bounded_run_leaves_far_cells_alone():
     near[:, 1:] |= region[:, :-1]
     near[:, :-1] |= region[:, 1:]
     far = ~near
-    obs = np.clip(ex.observation.observed.probability, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)
+    p = ex.observation.observed.probability  # hard evidence (P = 0 or 1) stays exact
+    obs = np.where((p == 0) | (p == 1), p, np.clip(p, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR))
     assert np.allclose(ex.result.beliefs.probability[far], obs[far], atol=1e-12)
     assert not np.allclose(ex.result.beliefs.probability[region], obs[region])
 

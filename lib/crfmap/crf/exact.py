@@ -52,11 +52,14 @@ def exact_marginals(observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, *, pairi
     u = link_unary(p, link).ravel()
     # states[s, i] = 1 if cell i is occupied in joint state s
     states = ((np.arange(2**n)[:, None] >> np.arange(n)[None, :]) & 1).astype(bool)
-    log_w = np.where(states, np.log(np.maximum(u, 1e-300)), np.log(np.maximum(1 - u, 1e-300))).sum(axis=1)
-    log_t = np.log(np.maximum(hidden, 1e-300))
+    with np.errstate(divide="ignore"):  # zero weights stay exactly zero (log 0 = -inf): hard evidence
+        log_w = np.where(states, np.log(u), np.log(1 - u)).sum(axis=1)
+        log_t = np.log(hidden)
     for a, b in lattice_edges(p.shape, region):
         # table rows/cols: index 0 = occupied, 1 = empty
         log_w += log_t[(~states[:, a]).astype(int), (~states[:, b]).astype(int)]
+    if not np.isfinite(log_w.max()):
+        raise InputError("observed", "contradictory hard evidence: no joint state has positive probability")
     w = np.exp(log_w - log_w.max())
     marg = (w[:, None] * states).sum(axis=0) / w.sum()
     return marg.reshape(p.shape)

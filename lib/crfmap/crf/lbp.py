@@ -41,6 +41,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
+from crfmap.crf.compiling import announce_lbp
+from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages, implied_messages
+from crfmap.crf.messages import check_messages, floored, initial_messages
 from crfmap.crf.packed import PackedBlock, fast_tables_ok
 from crfmap.errors import InputError
 from crfmap.crf.regions import disc_region, near_known  # noqa: F401  (re-exported)
@@ -86,10 +89,14 @@ class LBPResult:
         Whether the last change fell below ``tol``.
     messages : ndarray
         The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
+        The whole-grid fast kernel unpacks them on first read (most callers never do).
     seconds : float
         Wall time of the inference (compilation excluded after the first call).
     kernel : str
         "fast" or "plain": which kernels ran.
+    timings : dict
+        Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
+        messages ("unpack") on the whole-grid fast kernel; empty for the other paths.
     """
 
     beliefs: OccupancyGrid
@@ -100,6 +107,7 @@ class LBPResult:
     seconds: float = 0.0
     schedule: str = "checkerboard"
     kernel: str = "plain"
+    timings: dict = field(default_factory=dict)
 
     @property
     def last_change(self) -> float:
@@ -110,6 +118,16 @@ class LBPResult:
         last = f"{self.max_change[-1]:.2e}" if len(self.max_change) else "n/a"
         state = "converged" if self.converged else "not converged"
         return f"{self.schedule}: {self.iterations} iterations, {state} (last max message change {last})"
+
+
+def _messages(self):
+    value = self.__dict__["_messages"]
+    if callable(value):  # packed messages: unpack on first read (saves a pass and 16 bytes per cell)
+        value = self.__dict__["_messages"] = value()
+    return value
+
+
+LBPResult.messages = property(_messages, lambda self, value: self.__dict__.__setitem__("_messages", value))
 
 
 def message(table, sender_p) -> float:
@@ -132,11 +150,6 @@ def _as_grid(grid, name="grid") -> OccupancyGrid:
     if isinstance(grid, OccupancyGrid):
         return grid
     return OccupancyGrid(check_probability_array(grid, name))
-
-
-def initial_messages(shape, dtype=np.float64) -> np.ndarray:
-    """Uniform messages (0.5) for a grid of ``shape`` = (H, W)."""
-    return np.full((4,) + tuple(shape), 0.5, dtype=dtype)
 
 
 def infer(
@@ -233,27 +246,35 @@ def infer(
         raise InputError("kernel", "the fast kernels run the checkerboard schedule without damping only")
     use_fast = fast_ok and kernel != "plain"
     if messages is not None:
-        messages = _check_messages(messages, shape)
+        messages = check_messages(messages, shape)
     active = None
     if region is not None:
         active = np.asarray(region)
         if active.shape != shape:
             raise InputError("region", f"mask shape {active.shape} does not match the grid {shape}")
         active = active.astype(np.bool_, copy=False)
+    # hard evidence: certain cells are clamped (never updated, sending what their state implies)
+    states = certain_states(g.probability, link, tables, active)
+    sending = states if max_iter else None  # clamped cells send from the first iteration on
+    senders = active if sending is None else (sending < 0 if active is None else active & (sending < 0))
 
     import numba
 
     previous_threads = numba.get_num_threads()
     n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    announce_lbp(use_fast, schedule, g.probability.size, n_threads)
     numba.set_num_threads(n_threads)
     try:
         t0 = time.perf_counter()
         if use_fast:
-            out = _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, n_threads, block, freeze)
+            out = _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, n_threads, block, freeze,
+                              sending)
         else:
-            out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing,
-                               dtype, start)
-        beliefs, msg, changes = out
+            out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, senders, messages, pairing,
+                               dtype, start, (sending, active))
+        beliefs, msg, changes = out[:3]
+        if states is not None:
+            clamp_beliefs(states, beliefs)
         seconds = time.perf_counter() - t0
     finally:
         numba.set_num_threads(previous_threads)
@@ -270,18 +291,8 @@ def infer(
         seconds=seconds,
         schedule=schedule,
         kernel="fast" if use_fast else "plain",
+        timings=out[3] if len(out) > 3 else {},
     )
-
-
-def _check_messages(messages, shape) -> np.ndarray:
-    msg = np.asarray(messages)
-    if msg.shape != (4,) + tuple(shape):
-        raise InputError("messages", f"expected shape {(4,) + tuple(shape)} for this grid, got {msg.shape}")
-    if not np.issubdtype(msg.dtype, np.floating):
-        msg = msg.astype(np.float64)
-    if not np.all(np.isfinite(msg)) or msg.min() < 0 or msg.max() > 1:
-        raise InputError("messages", "must be finite probabilities in [0, 1]")
-    return msg
 
 
 def run_packed(packed, max_iter, tol, threads, block=DEFAULT_BLOCK, freeze=None, warm=True) -> list:
@@ -296,22 +307,37 @@ def run_packed(packed, max_iter, tol, threads, block=DEFAULT_BLOCK, freeze=None,
     return packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if warm else block)
 
 
-def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze):
-    """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes)."""
+def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze, states):
+    """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes).
+
+    ``active``: the region or None; ``states``: the certain cells (:mod:`crfmap.crf.evidence`) or None.
+    """
     shape = g.shape
     prob = np.ascontiguousarray(g.probability, dtype=np.float64)
     if active is None:
+        t = [time.perf_counter()]
         packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR)
         packed.set_unary(prob, link)
         if messages is not None:
             packed.set_messages(np.ascontiguousarray(messages))
-        changes = run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
+        if states is not None:
+            packed.clamp(states, implied_messages(tables))
+        t.append(time.perf_counter())
+        changes = (run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
+                   if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
+        t.append(time.perf_counter())
         beliefs = packed.beliefs()
-        packed.un = None  # free before the messages are unpacked (peak memory)
-        msg = packed.messages(np.empty((4,) + shape, dtype))
-        return beliefs, msg, changes
+        packed.un = None  # the result keeps only the packed messages
+        # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
+        msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731
+                                      clamp_messages(states, tables, initial_messages(shape, dtype)))
+        t.append(time.perf_counter())
+        return beliefs, msg, changes, dict(zip(("pack", "iterate", "unpack"), np.diff(t).tolist()))
     # Bounded: only the bounding box of the region plus a one-cell halo (the receivers) is packed.
-    msg = initial_messages(shape, dtype) if messages is None else _floored(messages, dtype, shape)
+    msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, MESSAGE_FLOOR)
+    if states is not None:
+        clamp_messages(states, tables, msg, active)
+        active = active & (states < 0)
     rows = np.flatnonzero(active.any(axis=1))
     changes = []
     if rows.size:
@@ -332,19 +358,20 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
     return beliefs, msg, changes
 
 
-def _floored(messages, dtype, shape):
-    msg = np.clip(messages, MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR).astype(dtype, copy=False)
-    # slots with no neighbour behind them must stay uniform
-    msg[0, :, 0] = msg[1, :, -1] = msg[2, 0, :] = msg[3, -1, :] = 0.5
-    return msg
+def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing, dtype, start, clamped):
+    """The reference kernels of :mod:`crfmap.crf._lbp_kernels`; returns (beliefs, messages, changes).
 
-
-def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing, dtype, start):
-    """The reference kernels of :mod:`crfmap.crf._lbp_kernels`; returns (beliefs, messages, changes)."""
+    ``active``: the senders; ``clamped``: (certain states or None, the region or None).
+    """
     shape = g.shape
     unary = np.clip(link_unary(g.probability, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR).astype(dtype)
-    coef = message_coefficients(directional_tables(hidden, pairing)).astype(dtype)
-    msg = initial_messages(shape, dtype) if messages is None else _floored(messages, dtype, shape)
+    tables = directional_tables(hidden, pairing)
+    coef = message_coefficients(tables).astype(dtype)
+    msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, MESSAGE_FLOOR)
+    if clamped[0] is not None:
+        clamp_messages(clamped[0], tables, msg, clamped[1])
+    # the thesis's walk visits the region (clamped cells included); only ``active`` cells send
+    walk = clamped[1]
     if active is None:
         active = np.ones((1, 1), dtype=np.bool_)
         use_active = False
@@ -364,8 +391,10 @@ def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, mess
         if start not in corner:
             raise InputError("start", f"must be one of {', '.join(corner)}, got {start!r}")
         sy, sx = corner[start]
-        if use_active and not active[sy, sx]:
-            cells = np.argwhere(active)
+        use_walk = walk is not None
+        walk = walk if use_walk else np.ones((1, 1), np.bool_)
+        if use_walk and not walk[sy, sx]:
+            cells = np.argwhere(walk)
             if cells.size:
                 sy, sx = (int(v) for v in cells[0])
     for _ in range(max_iter):
@@ -378,7 +407,7 @@ def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, mess
         elif schedule == "sweep":
             c = K._sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
         else:
-            order = K._bfs_order(shape[0], shape[1], active, use_active, sy, sx)
+            order = K._bfs_order(shape[0], shape[1], walk, use_walk, sy, sx)
             c = K._pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)
             if order.size:  # the next pass starts where this one ended (sec. 2.6.2)
                 sy, sx = divmod(int(order[-1]), shape[1])

@@ -9,112 +9,19 @@ the tiles whose messages still move (:meth:`PackedBlock.run`).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
 from crfmap.crf._lbp_fast import _pass_parallel, _pass_serial, _tile_max
-
-
-# --- layout conversion -------------------------------------------------------------------------
-
-
-@njit(inline="always", cache=True)
-def unary_odds(p, link, floor):
-    """Odds of the message an observation P(occupied) = p sends through ``link`` (floored).
-
-    ``link`` = (l00, l01, l10, l11); as :func:`crfmap.crf.potentials.link_unary`.
-    """
-    occ = link[0] * p + link[1] * (1.0 - p)
-    emp = link[2] * p + link[3] * (1.0 - p)
-    tot = occ + emp
-    u = occ / tot if tot > 0 else 0.5
-    u = min(max(u, floor), 1.0 - floor)
-    return u / (1.0 - u)
-
-
-@njit(parallel=True, cache=True)
-def _pack_unary(prob, y0, x0, h, w, link, floor, un):
-    """Observation odds of cells [y0, y0 + h) x [x0, x0 + w) of ``prob`` into planes ``un``."""
-    for y in prange(h):
-        for x in range(w):
-            un[(x + y) & 1, y + 1, (x >> 1) + 1] = unary_odds(prob[y0 + y, x0 + x], link, floor)
-
-
-@njit(parallel=True, cache=True)
-def _pack_messages(msg_p, y0, x0, h, w, floor, out):
-    """Probability messages [4, y, x] of the block into odds planes ``out`` (floored).
-
-    A slot with no neighbour behind it in the whole grid stays uniform (odds 1).
-    """
-    grid_h, grid_w = msg_p.shape[1], msg_p.shape[2]
-    for y in prange(h):
-        gy = y0 + y
-        for x in range(w):
-            gx = x0 + x
-            c = (x + y) & 1
-            for d in range(4):
-                m = min(max(msg_p[d, gy, gx], floor), 1.0 - floor)
-                r = m / (1.0 - m)
-                if (d == 0 and gx == 0) or (d == 1 and gx == grid_w - 1) or (d == 2 and gy == 0) or (d == 3 and gy == grid_h - 1):
-                    r = 1.0
-                out[c, d, y + 1, (x >> 1) + 1] = r
-
-
-@njit(parallel=True, cache=True)
-def _unpack_messages(packed, y0, x0, h, w, act, use_act, out):
-    """Odds planes back into probability messages ``out[4, y0 + y, x0 + x]``.
-
-    With ``use_act`` only slots whose sender is an active cell of the block are written (the
-    others did not change, and a round trip through odds would perturb them by rounding).
-    """
-    for y in prange(h):
-        for x in range(w):
-            c = (x + y) & 1
-            for d in range(4):
-                if use_act:
-                    sy = y + (1 if d == 3 else (-1 if d == 2 else 0))
-                    sx = x + (1 if d == 1 else (-1 if d == 0 else 0))
-                    if sy < 0 or sy >= h or sx < 0 or sx >= w or act[(sx + sy) & 1, sy + 1, (sx >> 1) + 1] == 0:
-                        continue
-                r = packed[c, d, y + 1, (x >> 1) + 1]
-                out[d, y0 + y, x0 + x] = r / (1.0 + r)
-
-
-@njit(parallel=True, cache=True)
-def _beliefs_packed(un, packed, h, w, out):
-    """P(occupied) of every cell of the block: observation odds times its four message odds."""
-    for y in prange(h):
-        for x in range(w):
-            c = (x + y) & 1
-            k = (x >> 1) + 1
-            b = float(un[c, y + 1, k])
-            for d in range(4):
-                b *= float(packed[c, d, y + 1, k])
-            out[y, x] = b / (1.0 + b)
-
-
-@njit(cache=True)
-def _active_extents(act, h, w, lo_k, hi_k):
-    """Per colour and row, the plane-index range [lo, hi) holding its active cells."""
-    for c in range(2):
-        for y in range(h):
-            off = (y + c) & 1
-            n = (w - off + 1) >> 1
-            lo = n
-            hi = 0
-            for k in range(n):
-                if act[c, y + 1, k + 1] != 0:
-                    if k < lo:
-                        lo = k
-                    hi = k + 1
-            lo_k[c, y] = lo if hi > 0 else 0
-            hi_k[c, y] = hi
-
-
-@njit(parallel=True, cache=True)
-def _pack_mask(mask, y0, x0, h, w, out):
-    for y in prange(h):
-        for x in range(w):
-            out[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if mask[y0 + y, x0 + x] else 0
+from crfmap.crf._packing import (  # noqa: F401  (the layout kernels, used here and re-exported)
+    unary_odds,
+    _pack_unary,
+    _pack_messages,
+    _unpack_messages,
+    _beliefs_packed,
+    _active_extents,
+    _fill_ones,
+    _pack_clamped,
+    _pack_mask,
+)
 
 
 # --- the Python side: a packed block and its passes ------------------------------------------
@@ -182,8 +89,10 @@ class PackedBlock:
         self.h, self.w = int(h), int(w)
         self.dtype = np.dtype(dtype)
         wp = plane_width(self.w)
-        self.msg = np.ones((2, 4, self.h + 2, wp), self.dtype)
-        self.un = np.ones((2, self.h + 2, wp), self.dtype)
+        self.msg = np.empty((2, 4, self.h + 2, wp), self.dtype)
+        self.un = np.empty((2, self.h + 2, wp), self.dtype)
+        _fill_ones(self.msg)
+        _fill_ones(self.un)
         self.co = odds_coefficients(tables, self.dtype, floor)
         self.floor = float(floor)
         self.lo = self.dtype.type(floor / (1.0 - floor))
@@ -222,6 +131,16 @@ class PackedBlock:
         self.hi_k = np.zeros((2, self.h), np.int64)
         _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
         self._extents_changed()
+
+    def clamp(self, state, implied):
+        """Whole-grid block: certain cells (``state`` >= 0) send ``implied[d, state]`` (probabilities) for ever.
+
+        Call after :meth:`set_messages`; see :mod:`crfmap.crf.evidence`.
+        """
+        p = np.clip(np.asarray(implied, np.float64), self.floor, 1.0 - self.floor)
+        act = np.empty(self.un.shape, np.uint8)
+        _pack_clamped(state, (p / (1.0 - p)).astype(self.dtype), self.msg, act)
+        self.set_packed_mask(act)
 
     def set_packed_mask(self, act):
         """Only cells whose entry of ``act`` (red/black planes, shape of ``un``) is non-zero send.

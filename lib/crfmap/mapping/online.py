@@ -7,7 +7,9 @@ builder's own ray casting), refreshes the observation of every cell a beam passe
 checkerboard LBP on the cells within ``radius`` of the laser, warm-started from the messages
 the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to
 convergence, which gives the offline result (:func:`crfmap.mapping.builder.build_grid` then
-:func:`crfmap.crf.lbp.infer`) when LBP has one fixed point.
+:func:`crfmap.crf.lbp.infer`) when LBP has one fixed point. Hard evidence never arises here: an
+arctan observation lies strictly inside (0, 1), and no link table (no all-zero row) makes such a
+cell certain (:mod:`crfmap.crf.evidence`), so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet

@@ -1,0 +1,60 @@
+"""Say so when a call is about to compile numba kernels (an empty cache: tens of seconds of silence otherwise).
+
+A dispatcher needs compiling when it has no compiled signature in this process and numba's
+on-disk cache holds no entry for its current source. Checking costs one small file read per
+dispatcher, once per process.
+
+>>> from crfmap.crf import _lbp_kernels as K
+>>> isinstance(needs_compiling(K._beliefs), bool)
+True
+"""
+from __future__ import annotations
+
+import sys
+
+MESSAGE = "compiling LBP kernels (first run only)..."
+_checked = set()  # dispatchers known to be compiled or cached in this process
+_announced = set()  # (fast, schedule, parallel) calls already announced
+
+
+def needs_compiling(dispatcher) -> bool:
+    """Whether calling ``dispatcher`` will compile it (not compiled here, nothing in the disk cache)."""
+    if dispatcher.signatures or id(dispatcher) in _checked:
+        return False
+    try:  # numba's cache index: empty when missing or written for another version of the source
+        cached = bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # no cache (cache=False, no locator) or another numba layout: assume a compile
+        cached = False
+    if cached:
+        _checked.add(id(dispatcher))
+    return not cached
+
+
+def announce(*dispatchers, stream=None) -> bool:
+    """Print :data:`MESSAGE` (one line, stderr) if any of ``dispatchers`` will compile; returns whether it did."""
+    if not any([needs_compiling(d) for d in dispatchers]):
+        return False
+    print(MESSAGE, file=stream or sys.stderr, flush=True)
+    return True
+
+
+def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1) -> bool:
+    """:func:`announce` for the kernels one :func:`crfmap.crf.lbp.infer` call on ``cells`` cells runs."""
+    from crfmap.crf import _lbp_fast as F
+    from crfmap.crf import _lbp_kernels as K
+    from crfmap.crf import packed as P
+
+    key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1)
+    if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
+        return False  # uncompiled: say it once per process, not on every call
+    if fast:  # the kernels every such call runs
+        kernels = (P._fill_ones, P._pack_unary, P._beliefs_packed, F._tile_max)
+        kernels += (F._pass_parallel,) if key[2] else (F._pass_serial,)
+    else:
+        kernels = {"checkerboard": (K._checkerboard_iteration,), "flooding": (K._flooding_iteration,),
+                   "sweep": (K._sweep_iteration,), "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
+        kernels += (K._beliefs,)
+    said = announce(*kernels)
+    if said:
+        _announced.add(key)
+    return said
