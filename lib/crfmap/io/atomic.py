@@ -55,6 +55,34 @@ def signals_raise():
             signal.signal(sig, handler)
 
 
+@contextlib.contextmanager
+def _signals_deferred():
+    """Hold SIGTERM/SIGHUP/SIGINT back while a temporary is created and registered for clean-up.
+
+    A signal arriving between ``mkstemp`` and the bookkeeping would otherwise leave the file behind.
+    Blocking it with ``pthread_sigmask`` is not enough (another thread, e.g. numba's, may take it and
+    Python still runs the handler in the main thread), so the handlers only note it here and the
+    handler in force runs, and raises, right after the block, when the clean-up knows the file.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending = []
+    previous = {sig: signal.signal(sig, lambda signum, frame: pending.append(signum))
+                for sig in (*CAUGHT_SIGNALS, signal.SIGINT)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if pending:
+            handler = previous[pending[0]]
+            if callable(handler):
+                handler(pending[0], None)  # e.g. _raise_interrupted or Python's KeyboardInterrupt
+            elif handler == signal.SIG_DFL:
+                os.kill(os.getpid(), pending[0])
+
+
 def _named(exc, path):
     """A write failure as an OSError naming ``path`` (a failed write(2) or a storage library names no file)."""
     import sqlite3
@@ -113,9 +141,10 @@ def atomic_paths(*paths):
         try:
             for path in paths:
                 path.parent.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent)
-                os.close(fd)
-                tmps.append(Path(tmp))
+                with _signals_deferred():
+                    fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent)
+                    os.close(fd)
+                    tmps.append(Path(tmp))
             yield tmps if len(paths) > 1 else tmps[0]
             for tmp, path in zip(tmps, paths):
                 _set_new_file_mode(tmp, path)
@@ -163,9 +192,11 @@ def atomic_dir(path):
         path.parent.mkdir(parents=True, exist_ok=True)
         # The folder is written as <hidden temporary>/<final name>: writers name their files after
         # the folder (rosbags: name.db3), so the bag holds the same names as a direct write would.
-        box = Path(tempfile.mkdtemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent))
-        tmp = box / path.name
+        box = None
         try:
+            with _signals_deferred():  # inside the try: a deferred signal raises where the clean-up sees box
+                box = Path(tempfile.mkdtemp(prefix=f".{path.name[:200]}.", suffix=".tmp", dir=path.parent))
+            tmp = box / path.name
             yield tmp
             _set_new_file_mode(tmp, path, folder=True)
             if path.exists():
@@ -183,7 +214,8 @@ def atomic_dir(path):
                 raise named from None
             raise
         finally:
-            shutil.rmtree(box, ignore_errors=True)
+            if box is not None:
+                shutil.rmtree(box, ignore_errors=True)
 
 
 # --- permissions: what open()/mkdir() would give, not mkstemp's 0600 --------------------------
