@@ -41,6 +41,19 @@ def _check(path: Path, strict: bool) -> None:
         raise InputError(path, why.split(": ", 1)[1])
 
 
+def _format_value(value, fmt=None) -> str:
+    """A generated value as prose: ``fmt`` for numbers, lists as "a, b" ("none" when empty), None as "n/a".
+
+    >>> _format_value(0.12345, ".3f"), _format_value(["best-table", "thesis"]), _format_value([])
+    ('0.123', 'best-table, thesis', 'none')
+    """
+    if value is None:
+        return "n/a"
+    if isinstance(value, list):
+        return ", ".join(_format_value(v, fmt) for v in value) if value else "none"
+    return format(value, fmt) if fmt else str(value)
+
+
 def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
     """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
     def replace(match):
@@ -70,9 +83,7 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
             missing.append(f"number {name}")
             return f"*(number {name} not generated)*"
         _check(f, strict)
-        if value is None:
-            return "n/a"
-        return format(value, extra) if extra else str(value)
+        return _format_value(value, extra)
 
     return PLACEHOLDER.sub(replace, template)
 
