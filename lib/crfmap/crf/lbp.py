@@ -36,15 +36,15 @@ sent messages before.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
 from crfmap.crf.compiling import announce_lbp
 from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages, implied_messages
 from crfmap.crf.messages import check_messages, floored, initial_messages
-from crfmap.crf.packed import PackedBlock, fast_tables_ok
+from crfmap.crf.packed import PackedBlock, fast_tables_ok, plane_width
+from crfmap.crf.result import LBPResult, result_grid
+from crfmap.crf.workspace import beliefs_buffer, packed_arrays
 from crfmap.errors import InputError
 from crfmap.crf.regions import disc_region, near_known  # noqa: F401  (re-exported)
 from crfmap.grid import OccupancyGrid, check_probability_array
@@ -70,64 +70,6 @@ FREEZE = 0.01
 # factors then stay far above float32's smallest normal (1e-38), hard evidence (P = 0 or 1, or a
 # table with zeros) stays finite, and contradicting hard evidence gives 0.5 rather than 0/0 = NaN.
 MESSAGE_FLOOR = 1e-6
-
-
-@dataclass
-class LBPResult:
-    """What :func:`infer` returns.
-
-    Attributes
-    ----------
-    beliefs : OccupancyGrid
-        P(occupied) of every hidden cell, with the input grid's metadata.
-    iterations : int
-        Iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
-    max_change : ndarray
-        The largest message change at every iteration (length ``iterations``); NaN where the
-        fast kernel did not measure it (it measures the last iteration of each block).
-    converged : bool
-        Whether the last change fell below ``tol``.
-    messages : ndarray
-        The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
-        The whole-grid fast kernel unpacks them on first read (most callers never do).
-    seconds : float
-        Wall time of the inference (compilation excluded after the first call).
-    kernel : str
-        "fast" or "plain": which kernels ran.
-    timings : dict
-        Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
-        messages ("unpack") on the whole-grid fast kernel; empty for the other paths.
-    """
-
-    beliefs: OccupancyGrid
-    iterations: int
-    max_change: np.ndarray
-    converged: bool
-    messages: np.ndarray = field(repr=False)
-    seconds: float = 0.0
-    schedule: str = "checkerboard"
-    kernel: str = "plain"
-    timings: dict = field(default_factory=dict)
-
-    @property
-    def last_change(self) -> float:
-        """The largest message change of the last iteration (NaN if none was done)."""
-        return float(self.max_change[-1]) if len(self.max_change) else float("nan")
-
-    def summary(self) -> str:
-        last = f"{self.max_change[-1]:.2e}" if len(self.max_change) else "n/a"
-        state = "converged" if self.converged else "not converged"
-        return f"{self.schedule}: {self.iterations} iterations, {state} (last max message change {last})"
-
-
-def _messages(self):
-    value = self.__dict__["_messages"]
-    if callable(value):  # packed messages: unpack on first read (saves a pass and 16 bytes per cell)
-        value = self.__dict__["_messages"] = value()
-    return value
-
-
-LBPResult.messages = property(_messages, lambda self, value: self.__dict__.__setitem__("_messages", value))
 
 
 def message(table, sender_p) -> float:
@@ -281,9 +223,10 @@ def infer(
 
     max_change = np.asarray(changes, dtype=np.float64)
     converged = bool(max_change.size and max_change[-1] < tol)
-    np.clip(beliefs, 0.0, 1.0, out=beliefs)
+    if not use_fast:  # the fast kernels' b / (1 + b) lies in [0, 1] already
+        np.clip(beliefs, 0.0, 1.0, out=beliefs)
     return LBPResult(
-        beliefs=g.with_probability(beliefs),
+        beliefs=result_grid(g, beliefs),
         iterations=len(max_change),
         max_change=max_change,
         converged=converged,
@@ -316,7 +259,9 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
     prob = np.ascontiguousarray(g.probability, dtype=np.float64)
     if active is None:
         t = [time.perf_counter()]
-        packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR)
+        wp = plane_width(shape[1])  # buffers of the last call of this shape when free: no page faults
+        arrays = packed_arrays((2, 4, shape[0] + 2, wp), (2, shape[0] + 2, wp), dtype)
+        packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR, arrays)
         packed.set_unary(prob, link)
         if messages is not None:
             packed.set_messages(np.ascontiguousarray(messages))
@@ -326,7 +271,7 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
         changes = (run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
                    if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
         t.append(time.perf_counter())
-        beliefs = packed.beliefs()
+        beliefs = packed.beliefs(beliefs_buffer(shape))
         packed.un = None  # the result keeps only the packed messages
         # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
         msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731
