@@ -42,6 +42,7 @@ from crfmap.crf import _lbp_kernels as K
 from crfmap.crf.compiling import announce_lbp
 from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages, implied_messages
 from crfmap.crf.messages import check_messages, floored, initial_messages
+from crfmap.crf.multiscale import COARSE_TOL_FACTOR, INITS, coarse_messages
 from crfmap.crf.packed import PackedBlock, fast_tables_ok, plane_width
 from crfmap.crf.result import LBPResult, result_grid
 from crfmap.crf.workspace import beliefs_buffer, packed_arrays
@@ -112,6 +113,7 @@ def infer(
     kernel: str = "auto",
     block: int = DEFAULT_BLOCK,
     freeze: float | None = None,
+    init: str = "uniform",
 ) -> LBPResult:
     """Run loopy belief propagation on a grid's CRF.
 
@@ -146,6 +148,13 @@ def infer(
         iterating until a neighbouring tile moves; None means ``FREEZE * tol``, 0 freezes only
         tiles that did not move at all (exactly the plain iterations). The result has always
         passed an iteration of every cell that moved no message by ``tol``.
+    init : "uniform" or "coarse"
+        Start messages when ``messages`` is None: uniform, or coarse-to-fine
+        (:mod:`crfmap.crf.multiscale`: the grid halved recursively, each level solved with
+        these arguments and its messages upsampled as the next level's warm start). Same
+        fixed point where LBP has one; in the ordered phase it may reach another. ``seconds``
+        includes the coarse levels (also ``timings["coarse"]``); ``iterations`` counts the
+        full grid's only.
 
     Returns
     -------
@@ -180,6 +189,17 @@ def infer(
         raise InputError("freeze", f"must be None or a number in [0, tol), got {freeze!r}")
     if threads is not None and not (isinstance(threads, (int, np.integer)) and threads >= 1):
         raise InputError("threads", f"must be a positive integer or None, got {threads!r}")
+    if init not in INITS:
+        raise InputError("init", f"must be one of {', '.join(INITS)}, got {init!r}")
+    if init == "coarse" and (messages is not None or region is not None):
+        raise InputError("init", '"coarse" starts the whole grid without messages: drop messages= and region=')
+    coarse_seconds = None
+    if init == "coarse":
+        t0 = time.perf_counter()
+        messages, _ = coarse_messages(g.probability, lambda p, m: infer(
+            p, hidden, link, schedule=schedule, max_iter=max_iter, tol=tol * COARSE_TOL_FACTOR, damping=damping, messages=m,
+            pairing=pairing, dtype=dtype, start=start, threads=threads, kernel=kernel, block=block, freeze=freeze))
+        coarse_seconds = time.perf_counter() - t0 if messages is not None else None
 
     shape = g.shape
     tables = directional_tables(hidden, pairing)
@@ -217,7 +237,7 @@ def infer(
         beliefs, msg, changes = out[:3]
         if states is not None:
             clamp_beliefs(states, beliefs)
-        seconds = time.perf_counter() - t0
+        seconds = time.perf_counter() - t0 + (coarse_seconds or 0.0)
     finally:
         numba.set_num_threads(previous_threads)
 
@@ -225,6 +245,9 @@ def infer(
     converged = bool(max_change.size and max_change[-1] < tol)
     if not use_fast:  # the fast kernels' b / (1 + b) lies in [0, 1] already
         np.clip(beliefs, 0.0, 1.0, out=beliefs)
+    timings = out[3] if len(out) > 3 else {}
+    if coarse_seconds is not None:
+        timings["coarse"] = coarse_seconds
     return LBPResult(
         beliefs=result_grid(g, beliefs),
         iterations=len(max_change),
@@ -234,7 +257,7 @@ def infer(
         seconds=seconds,
         schedule=schedule,
         kernel="fast" if use_fast else "plain",
-        timings=out[3] if len(out) > 3 else {},
+        timings=timings,
     )
 
 

@@ -33,7 +33,8 @@ class LBPResult:
         "fast" or "plain": which kernels ran.
     timings : dict
         Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
-        messages ("unpack") on the whole-grid fast kernel; empty for the other paths.
+        messages ("unpack") on the whole-grid fast kernel, and on the coarse levels of
+        ``init="coarse"`` ("coarse"); empty for the other paths.
     """
 
     beliefs: OccupancyGrid
