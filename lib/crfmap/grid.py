@@ -32,10 +32,10 @@ def check_probability_array(values, name="grid") -> np.ndarray:
         raise InputError(name, f"empty grid (shape {arr.shape})")
     if not np.issubdtype(arr.dtype, np.floating):
         arr = arr.astype(np.float64)
-    if not np.all(np.isfinite(arr)):
+    lo, hi = float(arr.min()), float(arr.max())  # NaN spreads into both, an infinity into one: no full-size temporary
+    if not (math.isfinite(lo) and math.isfinite(hi)):
         bad = int(np.count_nonzero(~np.isfinite(arr)))
         raise InputError(name, f"{bad} cell(s) are NaN or infinite")
-    lo, hi = float(arr.min()), float(arr.max())
     if lo < 0.0 or hi > 1.0:
         raise InputError(name, f"values must be probabilities in [0, 1], found range [{lo:g}, {hi:g}]")
     return arr

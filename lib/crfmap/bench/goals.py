@@ -21,8 +21,8 @@
 
 The coarse start is picked up by keyword: the first of :data:`COARSE_START_OPTIONS` whose
 keyword ``infer`` accepts and whose value it does not reject; ``crfmap bench`` then reports it as
-``start: <keyword>=<value>``. Today's ``infer`` has none of them (``start`` names the thesis
-schedule's corner and rejects ``"coarse"``), so the row says so.
+``start: <keyword>=<value>``: ``init="coarse"`` (:mod:`crfmap.crf.multiscale`; ``start`` names the
+thesis schedule's corner and rejects ``"coarse"``).
 """
 from __future__ import annotations
 
@@ -210,7 +210,7 @@ def coarse_start_option():
     from crfmap.errors import InputError
 
     accepted = inspect.signature(infer).parameters
-    probe = bench_grid(32, kind="office")
+    probe = bench_grid(256, kind="office")  # large enough to have a coarser level
     uniform = infer(probe, max_iter=1, tol=0.0).beliefs.probability
     for option in COARSE_START_OPTIONS:
         if not set(option) <= set(accepted):

@@ -57,6 +57,21 @@ def _certain_from_observations(prob, link, out):
     return counts.sum()
 
 
+@njit(parallel=True, cache=True)
+def _count_certain_observations(prob, link):
+    """How many cells the link makes certain (as :func:`_certain_from_observations`, writing nothing)."""
+    h, w = prob.shape
+    n = 0
+    for y in prange(h):
+        for x in range(w):
+            p = prob[y, x]
+            occ = link[0] * p + link[1] * (1.0 - p)
+            emp = link[2] * p + link[3] * (1.0 - p)
+            if (emp == 0.0 and occ > 0.0) or (occ == 0.0 and emp > 0.0):
+                n += 1
+    return n
+
+
 @njit(cache=True)
 def _propagate(state, forced, senders, use_senders, steps):
     """Unit propagation of certainty through hidden tables with zeros (depth first, in place).
@@ -180,11 +195,12 @@ def certain_states(probability, link, tables, senders=None, name="grid"):
     :class:`InputError` (naming ``name`` and the cell) on contradictory hard evidence.
     """
     prob = np.ascontiguousarray(probability, dtype=np.float64)
-    state = np.empty(prob.shape, np.int8)
-    n = _certain_from_observations(prob, np.asarray(link, np.float64).ravel(), state)
+    link = np.asarray(link, np.float64).ravel()
     forced = _forced(tables)
-    if n == 0 and not np.any(forced == -2):
-        return None
+    if not np.any(forced == -2) and _count_certain_observations(prob, link) == 0:
+        return None  # the common case: no state array (a full-size write into fresh memory)
+    state = np.empty(prob.shape, np.int8)
+    n = _certain_from_observations(prob, link, state)
     if np.any(forced != FREE):
         use = senders is not None
         mask = np.ascontiguousarray(senders, dtype=np.bool_) if use else np.ones((1, 1), np.bool_)

@@ -36,15 +36,16 @@ sent messages before.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
 from crfmap.crf.compiling import announce_lbp
 from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages, implied_messages
 from crfmap.crf.messages import check_messages, floored, initial_messages
-from crfmap.crf.packed import PackedBlock, fast_tables_ok
+from crfmap.crf.multiscale import COARSE_TOL_FACTOR, INITS, coarse_messages
+from crfmap.crf.packed import PackedBlock, fast_tables_ok, plane_width
+from crfmap.crf.result import LBPResult, result_grid
+from crfmap.crf.workspace import beliefs_buffer, packed_arrays
 from crfmap.errors import InputError
 from crfmap.crf.regions import disc_region, near_known  # noqa: F401  (re-exported)
 from crfmap.grid import OccupancyGrid, check_probability_array
@@ -70,64 +71,6 @@ FREEZE = 0.01
 # factors then stay far above float32's smallest normal (1e-38), hard evidence (P = 0 or 1, or a
 # table with zeros) stays finite, and contradicting hard evidence gives 0.5 rather than 0/0 = NaN.
 MESSAGE_FLOOR = 1e-6
-
-
-@dataclass
-class LBPResult:
-    """What :func:`infer` returns.
-
-    Attributes
-    ----------
-    beliefs : OccupancyGrid
-        P(occupied) of every hidden cell, with the input grid's metadata.
-    iterations : int
-        Iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
-    max_change : ndarray
-        The largest message change at every iteration (length ``iterations``); NaN where the
-        fast kernel did not measure it (it measures the last iteration of each block).
-    converged : bool
-        Whether the last change fell below ``tol``.
-    messages : ndarray
-        The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
-        The whole-grid fast kernel unpacks them on first read (most callers never do).
-    seconds : float
-        Wall time of the inference (compilation excluded after the first call).
-    kernel : str
-        "fast" or "plain": which kernels ran.
-    timings : dict
-        Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
-        messages ("unpack") on the whole-grid fast kernel; empty for the other paths.
-    """
-
-    beliefs: OccupancyGrid
-    iterations: int
-    max_change: np.ndarray
-    converged: bool
-    messages: np.ndarray = field(repr=False)
-    seconds: float = 0.0
-    schedule: str = "checkerboard"
-    kernel: str = "plain"
-    timings: dict = field(default_factory=dict)
-
-    @property
-    def last_change(self) -> float:
-        """The largest message change of the last iteration (NaN if none was done)."""
-        return float(self.max_change[-1]) if len(self.max_change) else float("nan")
-
-    def summary(self) -> str:
-        last = f"{self.max_change[-1]:.2e}" if len(self.max_change) else "n/a"
-        state = "converged" if self.converged else "not converged"
-        return f"{self.schedule}: {self.iterations} iterations, {state} (last max message change {last})"
-
-
-def _messages(self):
-    value = self.__dict__["_messages"]
-    if callable(value):  # packed messages: unpack on first read (saves a pass and 16 bytes per cell)
-        value = self.__dict__["_messages"] = value()
-    return value
-
-
-LBPResult.messages = property(_messages, lambda self, value: self.__dict__.__setitem__("_messages", value))
 
 
 def message(table, sender_p) -> float:
@@ -170,6 +113,7 @@ def infer(
     kernel: str = "auto",
     block: int = DEFAULT_BLOCK,
     freeze: float | None = None,
+    init: str = "uniform",
 ) -> LBPResult:
     """Run loopy belief propagation on a grid's CRF.
 
@@ -204,6 +148,13 @@ def infer(
         iterating until a neighbouring tile moves; None means ``FREEZE * tol``, 0 freezes only
         tiles that did not move at all (exactly the plain iterations). The result has always
         passed an iteration of every cell that moved no message by ``tol``.
+    init : "uniform" or "coarse"
+        Start messages when ``messages`` is None: uniform, or coarse-to-fine
+        (:mod:`crfmap.crf.multiscale`: the grid halved recursively, each level solved with
+        these arguments and its messages upsampled as the next level's warm start). Same
+        fixed point where LBP has one; in the ordered phase it may reach another. ``seconds``
+        includes the coarse levels (also ``timings["coarse"]``); ``iterations`` counts the
+        full grid's only.
 
     Returns
     -------
@@ -238,6 +189,17 @@ def infer(
         raise InputError("freeze", f"must be None or a number in [0, tol), got {freeze!r}")
     if threads is not None and not (isinstance(threads, (int, np.integer)) and threads >= 1):
         raise InputError("threads", f"must be a positive integer or None, got {threads!r}")
+    if init not in INITS:
+        raise InputError("init", f"must be one of {', '.join(INITS)}, got {init!r}")
+    if init == "coarse" and (messages is not None or region is not None):
+        raise InputError("init", '"coarse" starts the whole grid without messages: drop messages= and region=')
+    coarse_seconds = None
+    if init == "coarse":
+        t0 = time.perf_counter()
+        messages, _ = coarse_messages(g.probability, lambda p, m: infer(
+            p, hidden, link, schedule=schedule, max_iter=max_iter, tol=tol * COARSE_TOL_FACTOR, damping=damping, messages=m,
+            pairing=pairing, dtype=dtype, start=start, threads=threads, kernel=kernel, block=block, freeze=freeze))
+        coarse_seconds = time.perf_counter() - t0 if messages is not None else None
 
     shape = g.shape
     tables = directional_tables(hidden, pairing)
@@ -275,15 +237,19 @@ def infer(
         beliefs, msg, changes = out[:3]
         if states is not None:
             clamp_beliefs(states, beliefs)
-        seconds = time.perf_counter() - t0
+        seconds = time.perf_counter() - t0 + (coarse_seconds or 0.0)
     finally:
         numba.set_num_threads(previous_threads)
 
     max_change = np.asarray(changes, dtype=np.float64)
     converged = bool(max_change.size and max_change[-1] < tol)
-    np.clip(beliefs, 0.0, 1.0, out=beliefs)
+    if not use_fast:  # the fast kernels' b / (1 + b) lies in [0, 1] already
+        np.clip(beliefs, 0.0, 1.0, out=beliefs)
+    timings = out[3] if len(out) > 3 else {}
+    if coarse_seconds is not None:
+        timings["coarse"] = coarse_seconds
     return LBPResult(
-        beliefs=g.with_probability(beliefs),
+        beliefs=result_grid(g, beliefs),
         iterations=len(max_change),
         max_change=max_change,
         converged=converged,
@@ -291,7 +257,7 @@ def infer(
         seconds=seconds,
         schedule=schedule,
         kernel="fast" if use_fast else "plain",
-        timings=out[3] if len(out) > 3 else {},
+        timings=timings,
     )
 
 
@@ -316,7 +282,9 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
     prob = np.ascontiguousarray(g.probability, dtype=np.float64)
     if active is None:
         t = [time.perf_counter()]
-        packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR)
+        wp = plane_width(shape[1])  # buffers of the last call of this shape when free: no page faults
+        arrays = packed_arrays((2, 4, shape[0] + 2, wp), (2, shape[0] + 2, wp), dtype)
+        packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR, arrays)
         packed.set_unary(prob, link)
         if messages is not None:
             packed.set_messages(np.ascontiguousarray(messages))
@@ -326,7 +294,7 @@ def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads
         changes = (run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
                    if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
         t.append(time.perf_counter())
-        beliefs = packed.beliefs()
+        beliefs = packed.beliefs(beliefs_buffer(shape))
         packed.un = None  # the result keeps only the packed messages
         # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
         msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731

@@ -83,14 +83,17 @@ class PackedBlock:
     dtype : np.float32 or np.float64
     tables : (4, 2, 2) directional tables (rows receiver)
     floor : float, the message floor in probability
+    arrays : (msg, un) or None
+        Planes of the right shape and dtype to reuse (their contents are overwritten), e.g.
+        from :mod:`crfmap.crf.workspace`; None allocates new ones.
     """
 
-    def __init__(self, h, w, dtype, tables, floor):
+    def __init__(self, h, w, dtype, tables, floor, arrays=None):
         self.h, self.w = int(h), int(w)
         self.dtype = np.dtype(dtype)
         wp = plane_width(self.w)
-        self.msg = np.empty((2, 4, self.h + 2, wp), self.dtype)
-        self.un = np.empty((2, self.h + 2, wp), self.dtype)
+        self.msg, self.un = arrays if arrays is not None else (np.empty((2, 4, self.h + 2, wp), self.dtype),
+                                                                np.empty((2, self.h + 2, wp), self.dtype))
         _fill_ones(self.msg)
         _fill_ones(self.un)
         self.co = odds_coefficients(tables, self.dtype, floor)

@@ -1,0 +1,76 @@
+"""What :func:`crfmap.crf.lbp.infer` returns: beliefs, messages (unpacked on first read) and diagnostics."""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from crfmap.grid import OccupancyGrid
+
+
+@dataclass
+class LBPResult:
+    """What :func:`infer` returns.
+
+    Attributes
+    ----------
+    beliefs : OccupancyGrid
+        P(occupied) of every hidden cell, with the input grid's metadata.
+    iterations : int
+        Iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
+    max_change : ndarray
+        The largest message change at every iteration (length ``iterations``); NaN where the
+        fast kernel did not measure it (it measures the last iteration of each block).
+    converged : bool
+        Whether the last change fell below ``tol``.
+    messages : ndarray
+        The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
+        The whole-grid fast kernel unpacks them on first read (most callers never do).
+    seconds : float
+        Wall time of the inference (compilation excluded after the first call).
+    kernel : str
+        "fast" or "plain": which kernels ran.
+    timings : dict
+        Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
+        messages ("unpack") on the whole-grid fast kernel, and on the coarse levels of
+        ``init="coarse"`` ("coarse"); empty for the other paths.
+    """
+
+    beliefs: OccupancyGrid
+    iterations: int
+    max_change: np.ndarray
+    converged: bool
+    messages: np.ndarray = field(repr=False)
+    seconds: float = 0.0
+    schedule: str = "checkerboard"
+    kernel: str = "plain"
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def last_change(self) -> float:
+        """The largest message change of the last iteration (NaN if none was done)."""
+        return float(self.max_change[-1]) if len(self.max_change) else float("nan")
+
+    def summary(self) -> str:
+        last = f"{self.max_change[-1]:.2e}" if len(self.max_change) else "n/a"
+        state = "converged" if self.converged else "not converged"
+        return f"{self.schedule}: {self.iterations} iterations, {state} (last max message change {last})"
+
+
+def _messages(self):
+    value = self.__dict__["_messages"]
+    if callable(value):  # packed messages: unpack on first read (saves a pass and 16 bytes per cell)
+        value = self.__dict__["_messages"] = value()
+    return value
+
+
+LBPResult.messages = property(_messages, lambda self, value: self.__dict__.__setitem__("_messages", value))
+
+
+def result_grid(grid: OccupancyGrid, probability) -> OccupancyGrid:
+    """``grid.with_probability(probability)`` without checking ``probability`` again (LBP's beliefs are
+    probabilities by construction; the check reads every cell three times)."""
+    out = copy.copy(grid)
+    out.probability, out.meta = probability, dict(grid.meta)
+    return out

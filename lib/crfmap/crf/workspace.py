@@ -1,0 +1,56 @@
+"""Reusable buffers for :func:`crfmap.crf.lbp.infer` on large grids: no fresh memory per call.
+
+Writing into freshly allocated memory costs a page fault per page (in a virtual machine far
+more than the write itself): at 8192² an ``infer`` call allocated ~28 bytes per cell and spent
+longer faulting them in than iterating. The whole-grid fast path therefore takes its packed
+planes (20 bytes per cell in float32) and its float64 beliefs (8) from here: the buffers of the
+last call of that shape and dtype when nothing else holds them any more (the previous result was
+dropped), else new ones. Between calls the buffers of the last large grid stay allocated;
+:func:`release_workspace` frees them. Grids under :data:`WORKSPACE_MIN_CELLS` always get new ones.
+
+A buffer counts as free when only this module refers to it (Python reference count): a result
+whose beliefs or (still packed) messages someone keeps, even through a view, keeps its buffers.
+
+>>> a = beliefs_buffer((2048, 1024)); b = beliefs_buffer((2048, 1024))
+>>> a is b  # the first is still held (by ``a``)
+False
+>>> del a, b
+>>> beliefs_buffer((2048, 1024)).shape
+(2048, 1024)
+>>> release_workspace()
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+WORKSPACE_MIN_CELLS = 1 << 20  # smaller grids allocate afresh (cheap, and no memory kept)
+_CACHE: dict = {}  # name -> array of the last large grid
+_FREE_REFCOUNT = 3  # sys.getrefcount(old) of an array only _CACHE holds (the dict, ``old``, the argument)
+
+
+def _buffer(name, shape, dtype) -> np.ndarray:
+    shape, dtype = tuple(int(n) for n in shape), np.dtype(dtype)
+    if int(np.prod(shape)) < WORKSPACE_MIN_CELLS:
+        return np.empty(shape, dtype)
+    old = _CACHE.get(name)
+    if old is not None and old.shape == shape and old.dtype == dtype and sys.getrefcount(old) == _FREE_REFCOUNT:
+        return old
+    _CACHE[name] = np.empty(shape, dtype)  # a buffer still held elsewhere stays with its holder
+    return _CACHE[name]
+
+
+def beliefs_buffer(shape) -> np.ndarray:
+    """A float64 array of ``shape`` (contents undefined) for beliefs, reused when free."""
+    return _buffer("beliefs", shape, np.float64)
+
+
+def packed_arrays(msg_shape, un_shape, dtype):
+    """(msg, un) planes for :class:`crfmap.crf.packed.PackedBlock` (contents undefined), reused when free."""
+    return _buffer("msg", msg_shape, dtype), _buffer("un", un_shape, dtype)
+
+
+def release_workspace() -> None:
+    """Drop the kept buffers (their memory is freed once no result holds them)."""
+    _CACHE.clear()
