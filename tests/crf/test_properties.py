@@ -13,14 +13,16 @@ kernels' 1e-6 message floor would be a modelling approximation, not what is test
 """
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from crfmap.crf.exact import exact_marginals
 from crfmap.crf.lbp import infer
 from crfmap.errors import InputError
 
-SETTINGS = settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+# derandomize: the same examples on every run (CI must not find a new one by chance; a search for new
+# counterexamples is `pytest --hypothesis-seed=random`)
+SETTINGS = settings(max_examples=50, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 RUNS = [("auto", "checkerboard"), ("plain", "checkerboard"), ("plain", "flooding"), ("plain", "sweep"),
         ("plain", "thesis")]
 
@@ -50,6 +52,9 @@ def _exact_or_error(grid, table, pairing):
 @given(grid=st.lists(evidence, min_size=1, max_size=8).map(lambda v: np.array([v])),
        tp=tables(), run=st.sampled_from(RUNS), dtype=st.sampled_from([np.float64, np.float32]),
        vertical=st.booleans())
+# found by hypothesis: a hard equality table carries the 1e-6 floor of a message along the whole chain
+@example(grid=np.array([[0.001, 0.984375, 0.9921875, 0.9921875]]), tp=([[1.0, 0.0], [0.0, 1.0]], "receiver"),
+         run=("auto", "checkerboard"), dtype=np.float64, vertical=False)
 def test_chains_are_exact(grid, tp, run, dtype, vertical):
     table, pairing = tp
     if vertical:
@@ -67,6 +72,8 @@ def test_chains_are_exact(grid, tp, run, dtype, vertical):
     np.testing.assert_array_equal(p[hard], exact[hard])  # certain cells exactly
     # the kernels keep messages in [1e-6, 1 - 1e-6]: beliefs exact puts within ~1e-5 of 0 or 1 differ by a few 1e-6
     atol = 1e-5 if dtype == np.float64 else 2e-4
+    if np.min(table) == 0:  # a zero entry passes a floored message on undamped: the floor over the weakest
+        atol = max(atol, 1e-6 / 1e-3 * grid.size * 1e-2)  # evidence (1e-3), times the chain, times 1 - belief
     np.testing.assert_allclose(p, exact, atol=atol)
 
 
