@@ -10,7 +10,7 @@ Public API (imported on first use, so ``import crfmap.experiments`` stays cheap)
 """
 from __future__ import annotations
 
-import importlib
+from crfmap.lazy import attach
 
 _API = {
     "scan_scene": "pipeline",
@@ -34,17 +34,4 @@ _API = {
     "ising_exact": "background",
     "ising_energy": "background",
 }
-__all__ = sorted(_API)
-
-
-def __getattr__(name):
-    module = _API.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_API))
+__getattr__, __dir__, __all__ = attach(__name__, _API)
