@@ -3,3 +3,20 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+import pytest  # noqa: E402
+
+# a two-scan CARMEN log that the command tests build maps from (tests/mapping, tests/test_cli_ros.py)
+CARMEN_LINES = [
+    "PARAM robot_frontlaser_offset 0.0 nohost 0",
+    "FLASER 5 1.0 1.1 9.0 1.2 1.3 0.0 0.0 0.0 0.0 0.0 0.0 1.0 host 1.0",
+    "FLASER 5 1.0 9.0 1.2 1.2 1.3 0.1 0.0 0.1 0.1 0.0 0.1 2.0 host 2.0",
+]
+
+
+@pytest.fixture
+def small_log(tmp_path):
+    path = tmp_path / "small.log"
+    path.write_text("\n".join(CARMEN_LINES) + "\n")
+    return path

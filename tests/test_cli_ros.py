@@ -7,20 +7,6 @@ from crfmap.cli import main
 from crfmap.io.map_server import load_map
 from crfmap.io.nav2_costmap import nav2_counts
 
-CARMEN_LINES = [
-    "PARAM robot_frontlaser_offset 0.0 nohost 0",
-    "FLASER 5 1.0 1.1 9.0 1.2 1.3 0.0 0.0 0.0 0.0 0.0 0.0 1.0 host 1.0",
-    "FLASER 5 1.0 9.0 1.2 1.2 1.3 0.1 0.0 0.1 0.1 0.0 0.1 2.0 host 2.0",
-]
-
-
-@pytest.fixture
-def small_log(tmp_path):
-    path = tmp_path / "small.log"
-    path.write_text("\n".join(CARMEN_LINES) + "\n")
-    return path
-
-
 @pytest.mark.parametrize("loader", ["humble", "jazzy"])
 def test_build_writes_a_trinary_map_and_says_what_nav2_sees(small_log, tmp_path, capsys, loader):
     out = tmp_path / "map.yaml"

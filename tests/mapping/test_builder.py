@@ -269,20 +269,6 @@ def test_ros2_bag_map_needs_the_laser_mount():
 
 
 # --- the `crfmap build` command -----------------------------------------------------------
-CARMEN_LINES = [
-    "PARAM robot_frontlaser_offset 0.0 nohost 0",
-    "FLASER 5 1.0 1.1 9.0 1.2 1.3 0.0 0.0 0.0 0.0 0.0 0.0 1.0 host 1.0",
-    "FLASER 5 1.0 9.0 1.2 1.2 1.3 0.1 0.0 0.1 0.1 0.0 0.1 2.0 host 2.0",
-]
-
-
-@pytest.fixture
-def small_log(tmp_path):
-    path = tmp_path / "small.log"
-    path.write_text("\n".join(CARMEN_LINES) + "\n")
-    return path
-
-
 @pytest.mark.parametrize("suffix", [".npy", ".yaml"])
 def test_build_command_writes_a_map(small_log, tmp_path, capsys, suffix):
     from crfmap.io.grid_files import load_grid
