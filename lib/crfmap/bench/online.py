@@ -43,7 +43,7 @@ def bench_online(quick=False, progress=False):
     # the final map against an offline converged run, with a table for which LBP converges here
     tol = 1e-5 if quick else 1e-7
     n = 150 if quick else len(scans)
-    part = scans if n == len(scans) else _first_scans(scans, n)
+    part = scans if n == len(scans) else scans.head(n)
     t0 = time.perf_counter()
     mapper = OnlineMapper.for_scans(part, 0.05, hidden=EQUALITY_TABLE)
     mapper.run(part)
@@ -59,6 +59,3 @@ def bench_online(quick=False, progress=False):
                                                                       build_grid(part, 0.05).probability))))
     return out
 
-
-def _first_scans(scans, n):
-    return scans.head(n)
