@@ -229,15 +229,16 @@ def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi,
-                    phases, measure_from, cb):
+                    phases, measure_from, cb, first_phase):
     """Stage 1 of a pass on rows [y0, y1): phase j covers rows shrunk by j at inner edges.
 
     Edges at ``ylo`` / ``yhi`` (the first / last row that has senders) do not shrink.
     Wavefront order: at step s, phase j works on row s - j, so the rows a phase needs were
-    finished by phase j - 1 one step earlier and every live row stays in cache.
+    finished by phase j - 1 one step earlier and every live row stays in cache. Phases before
+    ``first_phase`` were done already (e.g. the first half-sweep, while packing).
     """
-    for s in range(y0, y1 + phases):
-        for j in range(phases):
+    for s in range(y0 + first_phase, y1 + phases):
+        for j in range(first_phase, phases):
             y = s - j
             lo_row = y0 + j if y0 > ylo else ylo
             hi_row = y1 - j if y1 < yhi else yhi
@@ -259,17 +260,18 @@ def _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, 
 
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass_parallel(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations,
-                   measure_from, cb):
+                   measure_from, cb, first_phase):
     """``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
     Rows outside [edges[0], edges[-1]) must hold no sender. Iterations from ``measure_from``
-    on are measured (max-accumulated together into ``cb``).
+    on are measured (max-accumulated together into ``cb``); half-sweeps before ``first_phase``
+    (0 or 1) were done already.
     """
     phases = 2 * iterations
     nb = edges.shape[0] - 1
     for b in prange(nb):
         _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b],
-                        edges[b + 1], edges[0], edges[nb], phases, measure_from, cb)
+                        edges[b + 1], edges[0], edges[nb], phases, measure_from, cb, first_phase)
     for b in prange(nb - 1):
         _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b + 1],
                        edges[0], edges[nb], phases, measure_from, cb)
@@ -278,10 +280,10 @@ def _pass_parallel(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass_serial(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, ylo, yhi, iterations,
-                 measure_from, cb):
+                 measure_from, cb, first_phase):
     """One band, rows [ylo, yhi), of :func:`_pass_parallel` (small jobs: no thread start-up)."""
     _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, ylo, yhi, ylo, yhi,
-                    2 * iterations, measure_from, cb)
+                    2 * iterations, measure_from, cb, first_phase)
     return 0
 
 

@@ -137,3 +137,103 @@ def _pack_mask(mask, y0, x0, h, w, out):
     for y in prange(h):
         for x in range(w):
             out[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if mask[y0 + y, x0 + x] else 0
+
+
+@njit(inline="always", cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})
+def _uniform_send(U, a0, a1, a2, a3, lo, hi, clamp):
+    """Odds a cell with observation odds U and uniform incoming messages sends through table a."""
+    m = (a0 * U + a1) / (a2 * U + a3)
+    return min(max(m, lo), hi) if clamp else m
+
+
+@njit(inline="always", cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})
+def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, count):
+    """Scratch row s: observation odds of row y, and what its red cells send (1 for black cells);
+    with ``count``, returns (cells outside [0, 1] or not finite, cells the link makes certain)."""
+    clamp = co[9] != 0
+    one = co[8]
+    bad = 0
+    certain = 0
+    for x in range(prob.shape[1]):
+        p = prob[y, x]
+        if count:
+            if not (p >= 0.0 and p <= 1.0):
+                bad += 1
+            occ = link[0] * p + link[1] * (1.0 - p)
+            emp = link[2] * p + link[3] * (1.0 - p)
+            if (emp == 0.0 and occ > 0.0) or (occ == 0.0 and emp > 0.0):
+                certain += 1
+        fu[s, x] = unary_odds(p, link, floor)
+        u = fu[s, x]
+        red = (x + y) & 1 == 0
+        fa[s, x + 1] = _uniform_send(u, co[0], co[1], co[2], co[3], lo, hi, clamp) if red else one
+        fb[s, x + 1] = _uniform_send(u, co[4], co[5], co[6], co[7], lo, hi, clamp) if red else one
+    return bad, certain
+
+
+@njit(parallel=True, cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})
+def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats):
+    """Whole grid from uniform messages in one trip through memory: observation odds into ``un``,
+    and the first half-sweep (red cells send; with uniform incoming messages they depend on the
+    observation only) into ``msg``: black cells' slots get what their red neighbours send, red
+    cells' slots and every ghost are uniform (1). Also counts per row block, into ``stats[b]``:
+    cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
+
+    Rows go in blocks, one thread each; a block keeps three rows of observation odds and of the
+    red cells' two outgoing messages (E/N table, W/S table) in a scratch, recomputing the rows
+    just outside it.
+    """
+    h, w = prob.shape
+    wp = un.shape[2]
+    nblocks = stats.shape[0]
+    one = co[8]
+    for b in prange(nblocks):
+        r0 = b * h // nblocks
+        r1 = (b + 1) * h // nblocks
+        fu = np.ones((3, w), un.dtype)  # [row % 3, x] observation odds
+        fa = np.ones((3, w + 2), un.dtype)  # [row % 3, x + 1] message of red cell x (E/N table); 1 elsewhere
+        fb = np.ones((3, w + 2), un.dtype)  # (W/S table)
+        bad = 0
+        certain = 0
+        if r0 > 0:
+            _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fa, fb, (r0 - 1) % 3, False)
+        if r0 < r1:
+            nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fa, fb, r0 % 3, True)
+            bad += nb
+            certain += nc
+        for y in range(r0, r1):
+            if y + 1 < h:
+                nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fa, fb, (y + 1) % 3, y + 1 < r1)
+                bad += nb
+                certain += nc
+            s = y % 3
+            up = (y + 1) % 3
+            down = (y + 2) % 3  # row y - 1
+            for c in range(2):  # observation odds, unit-stride writes per colour
+                off = (y + c) & 1
+                n = (w - off + 1) >> 1
+                for k in range(wp):
+                    un[c, y + 1, k] = fu[s, 2 * k - 2 + off] if 1 <= k <= n else one
+            for d in range(4):
+                for k in range(wp):
+                    msg[0, d, y + 1, k] = one
+            # black cell x of row y: from its west (slot 0), east (1), south (2, row y - 1), north (3) neighbours
+            off = (y + 1) & 1
+            n = (w - off + 1) >> 1
+            for k in range(wp):
+                x = 2 * k - 2 + off
+                inside = 1 <= k <= n
+                msg[1, 0, y + 1, k] = fa[s, x] if inside else one
+                msg[1, 1, y + 1, k] = fb[s, x + 2] if inside else one
+                msg[1, 2, y + 1, k] = fa[down, x + 1] if inside and y > 0 else one
+                msg[1, 3, y + 1, k] = fb[up, x + 1] if inside and y + 1 < h else one
+        stats[b, 0] = bad
+        stats[b, 1] = certain
+        if b == 0:  # the ghost rows
+            for c in range(2):
+                for k in range(wp):
+                    un[c, 0, k] = one
+                    un[c, h + 1, k] = one
+                    for d in range(4):
+                        msg[c, d, 0, k] = one
+                        msg[c, d, h + 1, k] = one

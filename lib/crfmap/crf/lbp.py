@@ -40,12 +40,12 @@ import numpy as np
 
 from crfmap.crf import _lbp_kernels as K
 from crfmap.crf.compiling import announce_lbp
-from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages, implied_messages
+from crfmap.crf.evidence import certain_states, clamp_beliefs, clamp_messages
+from crfmap.crf.fastpath import FREEZE, fused_start_applies, infer_fast, run_packed  # noqa: F401  (re-exported)
 from crfmap.crf.messages import check_messages, floored, initial_messages
 from crfmap.crf.multiscale import COARSE_TOL_FACTOR, INITS, coarse_messages
-from crfmap.crf.packed import PackedBlock, fast_tables_ok, plane_width
+from crfmap.crf.packed import fast_tables_ok
 from crfmap.crf.result import LBPResult, result_grid
-from crfmap.crf.workspace import beliefs_buffer, packed_arrays
 from crfmap.errors import InputError
 from crfmap.crf.regions import disc_region, near_known  # noqa: F401  (re-exported)
 from crfmap.grid import OccupancyGrid, check_probability_array
@@ -63,9 +63,8 @@ SCHEDULES = ("checkerboard", "flooding", "sweep", "thesis")
 KERNELS = ("auto", "fast", "plain")
 DEFAULT_BLOCK = 16  # iterations per pass of the fast kernel (temporal blocking depth)
 # Fast kernel: tiles whose messages moved by less than FREEZE * tol stop iterating until a
-# neighbouring tile moves (see crfmap.crf._lbp_fast.PackedBlock.run); convergence is always
-# decided by an iteration of every cell.
-FREEZE = 0.01
+# neighbouring tile moves (see crfmap.crf.packed.PackedBlock.run); convergence is always
+# decided by an iteration of every cell. FREEZE lives in crfmap.crf.fastpath.
 
 # Messages and observations are kept in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR]: products of five
 # factors then stay far above float32's smallest normal (1e-38), hard evidence (P = 0 or 1, or a
@@ -87,6 +86,9 @@ def message(table, sender_p) -> float:
     if not 0.0 <= p <= 1.0:
         raise InputError("sender_p", f"must be a probability in [0, 1], got {sender_p!r}")
     return float(K._message(p, 0.5, 0.5, 0.5, c[0], c[1], c[2], c[3], 0.0, 0.0, 0.0))
+
+
+_BARE_GRID = OccupancyGrid(np.zeros((1, 1)))  # default metadata, for arrays checked while packed
 
 
 def _as_grid(grid, name="grid") -> OccupancyGrid:
@@ -166,7 +168,6 @@ def infer(
     >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
     (True, True)
     """
-    g = _as_grid(grid)
     if schedule not in SCHEDULES:
         raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)}, got {schedule!r}")
     hidden = check_table(hidden, "hidden")
@@ -193,6 +194,14 @@ def infer(
         raise InputError("init", f"must be one of {', '.join(INITS)}, got {init!r}")
     if init == "coarse" and (messages is not None or region is not None):
         raise InputError("init", '"coarse" starts the whole grid without messages: drop messages= and region=')
+    tables = directional_tables(hidden, pairing)
+    fast_ok = schedule == "checkerboard" and damping == 0.0 and fast_tables_ok(tables)
+    if kernel == "fast" and not fast_ok:
+        raise InputError("kernel", "the fast kernels run the checkerboard schedule without damping only")
+    use_fast = fast_ok and kernel != "plain"
+    # the common call (a float64 array, whole grid, uniform start) is checked while it is packed
+    fused = use_fast and init == "uniform" and fused_start_applies(grid, tables, max_iter, block, region, messages)
+    g = result_grid(_BARE_GRID, grid) if fused else _as_grid(grid)
     coarse_seconds = None
     if init == "coarse":
         t0 = time.perf_counter()
@@ -202,11 +211,6 @@ def infer(
         coarse_seconds = time.perf_counter() - t0 if messages is not None else None
 
     shape = g.shape
-    tables = directional_tables(hidden, pairing)
-    fast_ok = schedule == "checkerboard" and damping == 0.0 and fast_tables_ok(tables)
-    if kernel == "fast" and not fast_ok:
-        raise InputError("kernel", "the fast kernels run the checkerboard schedule without damping only")
-    use_fast = fast_ok and kernel != "plain"
     if messages is not None:
         messages = check_messages(messages, shape)
     active = None
@@ -216,7 +220,7 @@ def infer(
             raise InputError("region", f"mask shape {active.shape} does not match the grid {shape}")
         active = active.astype(np.bool_, copy=False)
     # hard evidence: certain cells are clamped (never updated, sending what their state implies)
-    states = certain_states(g.probability, link, tables, active)
+    states = None if fused else certain_states(g.probability, link, tables, active)  # fused: found while packing
     sending = states if max_iter else None  # clamped cells send from the first iteration on
     senders = active if sending is None else (sending < 0 if active is None else active & (sending < 0))
 
@@ -229,8 +233,9 @@ def infer(
     try:
         t0 = time.perf_counter()
         if use_fast:
-            out = _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, n_threads, block, freeze,
-                              sending)
+            out = infer_fast(g.probability, tables, link, MESSAGE_FLOOR, max_iter, tol, active, messages, dtype,
+                             n_threads, block, freeze, sending, fused)
+            states = out[4] if fused else states  # fused: the certain cells the packing found
         else:
             out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, senders, messages, pairing,
                                dtype, start, (sending, active))
@@ -259,71 +264,6 @@ def infer(
         kernel="fast" if use_fast else "plain",
         timings=timings,
     )
-
-
-def run_packed(packed, max_iter, tol, threads, block=DEFAULT_BLOCK, freeze=None, warm=True) -> list:
-    """Run the fast kernel on a :class:`crfmap.crf.packed.PackedBlock` until ``tol`` or ``max_iter``.
-
-    ``freeze`` None means ``FREEZE * tol``; ``warm`` False (uniform start messages) starts with
-    blocks of ``block`` iterations, since such a run never stops after one. Returns the
-    per-iteration largest message changes (NaN where not measured).
-    """
-    if freeze is None:
-        freeze = FREEZE * tol
-    return packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if warm else block)
-
-
-def _infer_fast(g, tables, link, max_iter, tol, active, messages, dtype, threads, block, freeze, states):
-    """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes).
-
-    ``active``: the region or None; ``states``: the certain cells (:mod:`crfmap.crf.evidence`) or None.
-    """
-    shape = g.shape
-    prob = np.ascontiguousarray(g.probability, dtype=np.float64)
-    if active is None:
-        t = [time.perf_counter()]
-        wp = plane_width(shape[1])  # buffers of the last call of this shape when free: no page faults
-        arrays = packed_arrays((2, 4, shape[0] + 2, wp), (2, shape[0] + 2, wp), dtype)
-        packed = PackedBlock(shape[0], shape[1], dtype, tables, MESSAGE_FLOOR, arrays)
-        packed.set_unary(prob, link)
-        if messages is not None:
-            packed.set_messages(np.ascontiguousarray(messages))
-        if states is not None:
-            packed.clamp(states, implied_messages(tables))
-        t.append(time.perf_counter())
-        changes = (run_packed(packed, max_iter, tol, threads, block, freeze, warm=messages is not None)
-                   if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
-        t.append(time.perf_counter())
-        beliefs = packed.beliefs(beliefs_buffer(shape))
-        packed.un = None  # the result keeps only the packed messages
-        # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
-        msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731
-                                      clamp_messages(states, tables, initial_messages(shape, dtype)))
-        t.append(time.perf_counter())
-        return beliefs, msg, changes, dict(zip(("pack", "iterate", "unpack"), np.diff(t).tolist()))
-    # Bounded: only the bounding box of the region plus a one-cell halo (the receivers) is packed.
-    msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, MESSAGE_FLOOR)
-    if states is not None:
-        clamp_messages(states, tables, msg, active)
-        active = active & (states < 0)
-    rows = np.flatnonzero(active.any(axis=1))
-    changes = []
-    if rows.size:
-        cols = np.flatnonzero(active.any(axis=0))
-        y0, y1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, shape[0])
-        x0, x1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, shape[1])
-        packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, MESSAGE_FLOOR)
-        packed.set_unary(prob, link, y0, x0)
-        packed.set_messages(msg, y0, x0)
-        packed.set_mask(active, y0, x0)
-        changes = run_packed(packed, max_iter, tol, threads, block, freeze)
-        packed.messages(msg, y0, x0)
-    else:
-        changes = [0.0] if max_iter > 0 else []
-    unary = np.clip(link_unary(prob, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR)
-    beliefs = np.empty(shape, dtype=np.float64)
-    K._beliefs(unary, msg, beliefs)
-    return beliefs, msg, changes
 
 
 def _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, active, messages, pairing, dtype, start, clamped):

@@ -21,6 +21,7 @@ from crfmap.crf._packing import (  # noqa: F401  (the layout kernels, used here 
     _fill_ones,
     _pack_clamped,
     _pack_mask,
+    _pack_start,
 )
 
 
@@ -86,16 +87,20 @@ class PackedBlock:
     arrays : (msg, un) or None
         Planes of the right shape and dtype to reuse (their contents are overwritten), e.g.
         from :mod:`crfmap.crf.workspace`; None allocates new ones.
+    fill : bool
+        Fill the planes with uniform messages and observations; False leaves them undefined
+        for :meth:`start_uniform`, which writes every entry.
     """
 
-    def __init__(self, h, w, dtype, tables, floor, arrays=None):
+    def __init__(self, h, w, dtype, tables, floor, arrays=None, fill=True):
         self.h, self.w = int(h), int(w)
         self.dtype = np.dtype(dtype)
         wp = plane_width(self.w)
         self.msg, self.un = arrays if arrays is not None else (np.empty((2, 4, self.h + 2, wp), self.dtype),
                                                                 np.empty((2, self.h + 2, wp), self.dtype))
-        _fill_ones(self.msg)
-        _fill_ones(self.un)
+        if fill:
+            _fill_ones(self.msg)
+            _fill_ones(self.un)
         self.co = odds_coefficients(tables, self.dtype, floor)
         self.floor = float(floor)
         self.lo = self.dtype.type(floor / (1.0 - floor))
@@ -105,12 +110,29 @@ class PackedBlock:
         self.lo_k, self.hi_k = full_extents(self.h, self.w)
         self._extents_changed()
         self.cell_updates = 0  # cells that sent, summed over iterations (work done)
+        self.first_phase = 0  # 1: the next pass's first half-sweep was done while packing (start_uniform)
 
     # --- filling it ---------------------------------------------------------------------------
     def set_unary(self, probability, link, y0=0, x0=0):
         """Observation odds from P(occupied) ``probability[y0:y0+h, x0:x0+w]`` through ``link``."""
         link = np.asarray(link, np.float64).ravel()
         _pack_unary(probability, y0, x0, self.h, self.w, link, self.floor, self.un)
+
+    def start_uniform(self, probability, link, threads=1):
+        """Whole-grid block from uniform messages: :meth:`set_unary` and the first half-sweep at once.
+
+        Packing then also does what the red cells send in the first iteration (from uniform
+        messages it depends on their observations only), so the next :meth:`run_pass` starts
+        with the black cells; it must run at least two iterations (its measured iteration
+        would otherwise miss the red cells' changes). Returns (cells of ``probability``
+        outside [0, 1] or not finite, cells ``link`` makes certain): a caller with either must
+        not use the result (check the grid; clamp certain cells on the unfused path).
+        """
+        link = np.asarray(link, np.float64).ravel()
+        stats = np.zeros((max(1, min(4 * int(threads), self.h)), 2), np.int64)
+        _pack_start(probability, link, self.floor, self.co, self.lo, self.hi, self.un, self.msg, stats)
+        self.first_phase = 1
+        return int(stats[:, 0].sum()), int(stats[:, 1].sum())
 
     def set_messages(self, messages, y0=0, x0=0):
         """Probability messages ``messages[4, y0:y0+h, x0:x0+w]`` (None: uniform)."""
@@ -251,10 +273,13 @@ class PackedBlock:
         measure_from = iterations - 1 if measure else iterations
         args = (self.msg, self.un, self.act, self.use_act, self.lo_k, self.hi_k, segs, nseg, TILE_ROWS,
                 self.h, self.w, self.co, self.lo, self.hi)
+        if self.first_phase and (iterations < 2 or active is not None or self.use_act):
+            raise ValueError("the pass after start_uniform must run at least two iterations of the whole grid")
+        first, self.first_phase = self.first_phase, 0
         if len(edges) == 2:
-            _pass_serial(*args, int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb)
+            _pass_serial(*args, int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb, first)
         else:
-            _pass_parallel(*args, edges, int(iterations), int(measure_from), cb)
+            _pass_parallel(*args, edges, int(iterations), int(measure_from), cb, first)
         if active is None:
             cells = self.active_cells
         self.cell_updates += cells * iterations
