@@ -17,10 +17,9 @@ def unary_odds(p, link, floor):
     """
     occ = link[0] * p + link[1] * (1.0 - p)
     emp = link[2] * p + link[3] * (1.0 - p)
-    tot = occ + emp
-    u = occ / tot if tot > 0 else 0.5
-    u = min(max(u, floor), 1.0 - floor)
-    return u / (1.0 - u)
+    hi = (1.0 - floor) / floor  # the odds of P = 1 - floor (a loop invariant)
+    r = occ / emp if emp > 0 else (hi if occ > 0 else 1.0)  # one division: P = occ / (occ + emp) as odds
+    return min(max(r, 1.0 / hi), hi)
 
 
 @njit(parallel=True, cache=True)
@@ -146,42 +145,68 @@ def _uniform_send(U, a0, a1, a2, a3, lo, hi, clamp):
     return min(max(m, lo), hi) if clamp else m
 
 
-@njit(inline="always", cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})
-def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, count):
-    """Scratch row s: observation odds of row y, and what its red cells send (1 for black cells);
-    with ``count``, returns (cells outside [0, 1] or not finite, cells the link makes certain)."""
-    clamp = co[9] != 0
+@njit(inline="always", cache=True)
+def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, own, un):
+    """Row y: its observation odds into ``un`` if ``own``, and into scratch row s of ``fa`` / ``fb``
+    what its red cells send from uniform messages (red plane indices, 1 at the ghosts); with
+    ``own``, returns (cells outside [0, 1] or not finite, cells the link makes certain).
+    Unit-stride loops, so that they vectorise."""
+    w = prob.shape[1]
+    wp = un.shape[2]
     one = co[8]
     bad = 0
     certain = 0
-    for x in range(prob.shape[1]):
-        p = prob[y, x]
-        if count:
-            if not (p >= 0.0 and p <= 1.0):
-                bad += 1
+    if own:
+        for x in range(w):
+            p = prob[y, x]
+            bad += 0 if (p >= 0.0 and p <= 1.0) else 1
             occ = link[0] * p + link[1] * (1.0 - p)
             emp = link[2] * p + link[3] * (1.0 - p)
-            if (emp == 0.0 and occ > 0.0) or (occ == 0.0 and emp > 0.0):
-                certain += 1
-        fu[s, x] = unary_odds(p, link, floor)
-        u = fu[s, x]
-        red = (x + y) & 1 == 0
-        fa[s, x + 1] = _uniform_send(u, co[0], co[1], co[2], co[3], lo, hi, clamp) if red else one
-        fb[s, x + 1] = _uniform_send(u, co[4], co[5], co[6], co[7], lo, hi, clamp) if red else one
+            certain += 1 if (emp == 0.0 and occ > 0.0) or (occ == 0.0 and emp > 0.0) else 0
+    for x in range(w):
+        fu[x] = unary_odds(prob[y, x], link, floor)
+    if own:
+        for c in range(2):
+            off = (y + c) & 1
+            n = (w - off + 1) >> 1
+            un[c, y + 1, 0] = one
+            for k in range(1, n + 1):
+                un[c, y + 1, k] = fu[2 * k - 2 + off]
+            for k in range(n + 1, wp):
+                un[c, y + 1, k] = one
+    off = y & 1
+    n = (w - off + 1) >> 1
+    _uniform_sends(fu, fa[s], fb[s], off, n, co, lo, hi)
     return bad, certain
 
 
-@njit(parallel=True, cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})
+@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})  # not inlined: keeps its own flags
+def _uniform_sends(fu, fa, fb, off, n, co, lo, hi):
+    """fa[k], fb[k]: what red cell k (x = 2 k - 2 + off) sends through the E/N and W/S tables; 1 elsewhere."""
+    clamp = co[9] != 0
+    one = co[8]
+    fa[0] = one
+    fb[0] = one
+    for k in range(1, n + 1):
+        u = fu[2 * k - 2 + off]
+        fa[k] = _uniform_send(u, co[0], co[1], co[2], co[3], lo, hi, clamp)
+        fb[k] = _uniform_send(u, co[4], co[5], co[6], co[7], lo, hi, clamp)
+    for k in range(n + 1, fa.shape[0]):
+        fa[k] = one
+        fb[k] = one
+
+
+@njit(parallel=True, cache=True)  # no fastmath: the grid check must see NaN
 def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats):
     """Whole grid from uniform messages in one trip through memory: observation odds into ``un``,
     and the first half-sweep (red cells send; with uniform incoming messages they depend on the
-    observation only) into ``msg``: black cells' slots get what their red neighbours send, red
-    cells' slots and every ghost are uniform (1). Also counts per row block, into ``stats[b]``:
+    observation only) into ``msg``: black cells' slots get what their red neighbours send, the
+    ghost rows are uniform (1), and of the red cells' slots only those at the grid's edges are
+    set (1): the next half-sweep writes all the others before anything reads them. Also counts per row block, into ``stats[b]``:
     cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
 
-    Rows go in blocks, one thread each; a block keeps three rows of observation odds and of the
-    red cells' two outgoing messages (E/N table, W/S table) in a scratch, recomputing the rows
-    just outside it.
+    Rows go in blocks, one thread each; a block keeps three rows of what red cells send (E/N
+    table, W/S table) in a scratch, computing the rows just outside it again.
     """
     h, w = prob.shape
     wp = un.shape[2]
@@ -190,43 +215,59 @@ def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats):
     for b in prange(nblocks):
         r0 = b * h // nblocks
         r1 = (b + 1) * h // nblocks
-        fu = np.ones((3, w), un.dtype)  # [row % 3, x] observation odds
-        fa = np.ones((3, w + 2), un.dtype)  # [row % 3, x + 1] message of red cell x (E/N table); 1 elsewhere
-        fb = np.ones((3, w + 2), un.dtype)  # (W/S table)
+        fu = np.empty(w, un.dtype)  # one row of observation odds
+        fa = np.ones((3, wp + 1), un.dtype)  # [row % 3, red plane index]
+        fb = np.ones((3, wp + 1), un.dtype)
         bad = 0
         certain = 0
         if r0 > 0:
-            _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fa, fb, (r0 - 1) % 3, False)
+            _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fa, fb, (r0 - 1) % 3, False, un)
         if r0 < r1:
-            nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fa, fb, r0 % 3, True)
+            nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fa, fb, r0 % 3, True, un)
             bad += nb
             certain += nc
         for y in range(r0, r1):
             if y + 1 < h:
-                nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fa, fb, (y + 1) % 3, y + 1 < r1)
+                nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fa, fb, (y + 1) % 3, y + 1 < r1, un)
                 bad += nb
                 certain += nc
-            s = y % 3
-            up = (y + 1) % 3
-            down = (y + 2) % 3  # row y - 1
-            for c in range(2):  # observation odds, unit-stride writes per colour
-                off = (y + c) & 1
-                n = (w - off + 1) >> 1
+            # red cells' slots: the black cells send into all of them in the first half-sweep of the
+            # next pass, except those no neighbour sends into (at the grid's edges): only those are set
+            off = y & 1
+            if off == 0:
+                msg[0, 0, y + 1, 1] = one  # x = 0: no west neighbour
+            if (w - 1 + y) & 1 == 0:
+                msg[0, 1, y + 1, (w - 1) // 2 + 1] = one  # x = w - 1: no east neighbour
+            if y == 0:
                 for k in range(wp):
-                    un[c, y + 1, k] = fu[s, 2 * k - 2 + off] if 1 <= k <= n else one
+                    msg[0, 2, 1, k] = one
+            if y == h - 1:
+                for k in range(wp):
+                    msg[0, 3, h, k] = one
+            # black cells of row y (plane index k) hear from their west (slot 0), east (1), south
+            # (2, row y - 1) and north (3, row y + 1) neighbours; red plane indices as in _send
+            s, up, down = y % 3, (y + 1) % 3, (y + 2) % 3
+            e = y & 1
+            n = (w - ((y + 1) & 1) + 1) >> 1
+            for k in range(1, n + 1):
+                msg[1, 0, y + 1, k] = fa[s, k - e]
+                msg[1, 1, y + 1, k] = fb[s, k - e + 1]
+            if y > 0:
+                for k in range(1, n + 1):
+                    msg[1, 2, y + 1, k] = fa[down, k]
+            else:
+                for k in range(1, n + 1):
+                    msg[1, 2, y + 1, k] = one
+            if y + 1 < h:
+                for k in range(1, n + 1):
+                    msg[1, 3, y + 1, k] = fb[up, k]
+            else:
+                for k in range(1, n + 1):
+                    msg[1, 3, y + 1, k] = one
             for d in range(4):
-                for k in range(wp):
-                    msg[0, d, y + 1, k] = one
-            # black cell x of row y: from its west (slot 0), east (1), south (2, row y - 1), north (3) neighbours
-            off = (y + 1) & 1
-            n = (w - off + 1) >> 1
-            for k in range(wp):
-                x = 2 * k - 2 + off
-                inside = 1 <= k <= n
-                msg[1, 0, y + 1, k] = fa[s, x] if inside else one
-                msg[1, 1, y + 1, k] = fb[s, x + 2] if inside else one
-                msg[1, 2, y + 1, k] = fa[down, x + 1] if inside and y > 0 else one
-                msg[1, 3, y + 1, k] = fb[up, x + 1] if inside and y + 1 < h else one
+                msg[1, d, y + 1, 0] = one
+                for k in range(n + 1, wp):
+                    msg[1, d, y + 1, k] = one
         stats[b, 0] = bad
         stats[b, 1] = certain
         if b == 0:  # the ghost rows
