@@ -202,8 +202,9 @@ def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats):
     and the first half-sweep (red cells send; with uniform incoming messages they depend on the
     observation only) into ``msg``: black cells' slots get what their red neighbours send, the
     ghost rows are uniform (1), and of the red cells' slots only those at the grid's edges are
-    set (1): the next half-sweep writes all the others before anything reads them. Also counts per row block, into ``stats[b]``:
-    cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
+    set (1): the next half-sweep writes all the others before anything reads them. Also counts
+    per row block, into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link
+    makes certain (hard evidence).
 
     Rows go in blocks, one thread each; a block keeps three rows of what red cells send (E/N
     table, W/S table) in a scratch, computing the rows just outside it again.

@@ -49,10 +49,11 @@ def infer_fast(prob, tables, link, floor, max_iter, tol, active, messages, dtype
                fused=False):
     """Checkerboard LBP on the fast kernels; returns (beliefs, messages, changes, timings, states).
 
-    ``floor``: the message floor; ``active``: the region or None; ``states``: the certain cells (:mod:`crfmap.crf.evidence`) or
-    None. With ``fused`` (see :func:`fused_start_applies`; ``states`` not computed yet) ``prob``
-    is checked here: a bad grid raises :class:`crfmap.errors.InputError`, certain cells take
-    the general path, and the returned ``states`` are the ones found.
+    ``floor``: the message floor; ``active``: the region or None; ``states``: the certain cells
+    (:mod:`crfmap.crf.evidence`) or None. With ``fused`` (see :func:`fused_start_applies`;
+    ``states`` not computed yet) ``prob`` is checked here: a bad grid raises
+    :class:`crfmap.errors.InputError`, certain cells take the general path, and the returned
+    ``states`` are the ones found.
     """
     shape = prob.shape
     if active is not None:

@@ -146,9 +146,10 @@ def infer(
         Fast kernel: at most this many iterations per trip through memory; the message change
         is measured on the last iteration of each block.
     freeze : float or None
-        Fast kernel: tiles (32 x 256 cells) whose messages moved by at most this stop
-        iterating until a neighbouring tile moves; None means ``FREEZE * tol``, 0 freezes only
-        tiles that did not move at all (exactly the plain iterations). The result has always
+        Fast kernel: tiles (``TILE_ROWS`` x ``TILE_COLS`` cells, :mod:`crfmap.crf.packed`) whose
+        messages moved by at most this stop iterating until a neighbouring tile moves; None
+        means ``FREEZE * tol``, 0 freezes only tiles that did not move at all (exactly the
+        plain iterations). The result has always
         passed an iteration of every cell that moved no message by ``tol``.
     init : "uniform" or "coarse"
         Start messages when ``messages`` is None: uniform, or coarse-to-fine

