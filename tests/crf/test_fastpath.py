@@ -99,3 +99,18 @@ def test_certain_cells_found_while_packing_are_clamped_as_on_the_general_path():
     general = infer(OccupancyGrid(obs), TABLES[0][0], link, max_iter=30, tol=0.0)
     np.testing.assert_allclose(fused.beliefs.probability, general.beliefs.probability, rtol=0, atol=1e-12)
     assert (fused.beliefs.probability[10:13, 20:24] == 1.0).all()
+
+
+@pytest.mark.parametrize("link", [LINK, [[1.0, 0.3], [0.0, 1.0]], [[0.0, 1.0], [1.0, 0.0]], [[0.0, 0.0], [0.0, 0.0]],
+                                  [[2.0, 0.0], [0.0, 0.0]]])
+def test_observation_odds_are_the_floored_probability_as_odds(link):
+    """One division (occ / emp) gives the odds of the floored P(occupied) = occ / (occ + emp) (the earlier form;
+    at the floor that form loses digits in 1 - u, hence 1e-9)."""
+    from crfmap.crf._packing import unary_odds
+
+    lk = np.asarray(link, np.float64).ravel()
+    for p in np.concatenate([[0.0, 1.0, 0.5, 1e-9, 1 - 1e-9], RNG.uniform(0, 1, 200)]):
+        occ, emp = lk[0] * p + lk[1] * (1 - p), lk[2] * p + lk[3] * (1 - p)
+        u = occ / (occ + emp) if occ + emp > 0 else 0.5
+        u = min(max(u, MESSAGE_FLOOR), 1 - MESSAGE_FLOOR)
+        assert unary_odds(p, lk, MESSAGE_FLOOR) == pytest.approx(u / (1 - u), rel=1e-9)
