@@ -76,12 +76,21 @@ def _unpack_messages(packed, y0, x0, h, w, act, use_act, out):
 def _beliefs_packed(un, packed, h, w, out):
     """P(occupied) of every cell of the block: observation odds times its four message odds."""
     for y in prange(h):
-        for c in range(2):  # colour by colour: unit-stride reads
-            off = (y + c) & 1
-            for k in range(1, ((w - off + 1) >> 1) + 1):
-                b = float(un[c, y + 1, k]) * float(packed[c, 0, y + 1, k]) * float(packed[c, 1, y + 1, k])
-                b = b * float(packed[c, 2, y + 1, k]) * float(packed[c, 3, y + 1, k])
-                out[y, 2 * k - 2 + off] = b / (1.0 + b)
+        ce = y & 1  # colour of the even columns; cells 2m and 2m + 1 both sit at plane index m + 1
+        co = 1 - ce
+        for m in range(w >> 1):  # unit-stride reads of both planes, pairs of adjacent writes
+            k = m + 1
+            b = float(un[ce, y + 1, k]) * float(packed[ce, 0, y + 1, k]) * float(packed[ce, 1, y + 1, k])
+            b = b * float(packed[ce, 2, y + 1, k]) * float(packed[ce, 3, y + 1, k])
+            out[y, 2 * m] = b / (1.0 + b)
+            b = float(un[co, y + 1, k]) * float(packed[co, 0, y + 1, k]) * float(packed[co, 1, y + 1, k])
+            b = b * float(packed[co, 2, y + 1, k]) * float(packed[co, 3, y + 1, k])
+            out[y, 2 * m + 1] = b / (1.0 + b)
+        if w & 1:
+            k = (w >> 1) + 1
+            b = float(un[ce, y + 1, k]) * float(packed[ce, 0, y + 1, k]) * float(packed[ce, 1, y + 1, k])
+            b = b * float(packed[ce, 2, y + 1, k]) * float(packed[ce, 3, y + 1, k])
+            out[y, w - 1] = b / (1.0 + b)
 
 
 @njit(cache=True)
