@@ -168,10 +168,10 @@ def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, own, un):
     if own:
         for x in range(w):
             p = prob[y, x]
-            bad += 0 if (p >= 0.0 and p <= 1.0) else 1
+            bad += np.int64(not ((p >= 0.0) & (p <= 1.0)))  # NaN fails both; & (not and): no branches
             occ = link[0] * p + link[1] * (1.0 - p)
             emp = link[2] * p + link[3] * (1.0 - p)
-            certain += 1 if (emp == 0.0 and occ > 0.0) or (occ == 0.0 and emp > 0.0) else 0
+            certain += np.int64(((emp == 0.0) & (occ > 0.0)) | ((occ == 0.0) & (emp > 0.0)))
     for x in range(w):
         fu[x] = unary_odds(prob[y, x], link, floor)
     if own:
