@@ -60,11 +60,14 @@ def test_the_pass_after_a_fused_start_must_do_two_whole_grid_iterations():
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("hidden", [TABLES[0][0], TABLES[1][0], TABLES[3][0]])
-def test_infer_on_an_array_equals_infer_on_a_checked_grid(dtype, hidden):
-    """An ndarray takes the fused start, an OccupancyGrid the general path: same run."""
+def test_the_fused_start_equals_the_general_path(dtype, hidden):
+    """A C-ordered float64 array (or grid) takes the fused start, a Fortran-ordered one the general path: same run."""
     obs = RNG.uniform(0.0, 1.0, (150, 97))
     fused = infer(obs, hidden, LINK, max_iter=37, tol=0.0, dtype=dtype)
-    general = infer(OccupancyGrid(obs), hidden, LINK, max_iter=37, tol=0.0, dtype=dtype)
+    general = infer(np.asfortranarray(obs), hidden, LINK, max_iter=37, tol=0.0, dtype=dtype)
+    on_grid = infer(OccupancyGrid(obs, resolution=0.05), hidden, LINK, max_iter=37, tol=0.0, dtype=dtype)
+    assert np.array_equal(on_grid.beliefs.probability, fused.beliefs.probability)
+    assert on_grid.beliefs.resolution == 0.05
     assert fused.iterations == general.iterations == 37
     tol = 1e-6 if dtype == np.float32 else 1e-12
     np.testing.assert_allclose(fused.beliefs.probability, general.beliefs.probability, rtol=0, atol=tol)
@@ -96,7 +99,7 @@ def test_certain_cells_found_while_packing_are_clamped_as_on_the_general_path():
     obs = RNG.uniform(0.05, 0.95, (60, 45))
     obs[10:13, 20:24] = 1.0
     fused = infer(obs, TABLES[0][0], link, max_iter=30, tol=0.0)
-    general = infer(OccupancyGrid(obs), TABLES[0][0], link, max_iter=30, tol=0.0)
+    general = infer(np.asfortranarray(obs), TABLES[0][0], link, max_iter=30, tol=0.0)
     np.testing.assert_allclose(fused.beliefs.probability, general.beliefs.probability, rtol=0, atol=1e-12)
     assert (fused.beliefs.probability[10:13, 20:24] == 1.0).all()
 

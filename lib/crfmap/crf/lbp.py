@@ -201,8 +201,10 @@ def infer(
         raise InputError("kernel", "the fast kernels run the checkerboard schedule without damping only")
     use_fast = fast_ok and kernel != "plain"
     # the common call (a float64 array, whole grid, uniform start) is checked while it is packed
-    fused = use_fast and init == "uniform" and fused_start_applies(grid, tables, max_iter, block, region, messages)
-    g = result_grid(_BARE_GRID, grid) if fused else _as_grid(grid)
+    given = isinstance(grid, OccupancyGrid)  # checked when made; an array is checked while packed (fused)
+    fused = use_fast and init == "uniform" and fused_start_applies(grid.probability if given else grid, tables,
+                                                                   max_iter, block, region, messages)
+    g = result_grid(_BARE_GRID, grid) if fused and not given else _as_grid(grid)
     coarse_seconds = None
     if init == "coarse":
         t0 = time.perf_counter()
@@ -234,7 +236,7 @@ def infer(
     try:
         t0 = time.perf_counter()
         if use_fast:
-            out = infer_fast(g.probability, tables, link, MESSAGE_FLOOR, max_iter, tol, active, messages, dtype,
+            out = infer_fast(np.ascontiguousarray(g.probability, dtype=np.float64), tables, link, MESSAGE_FLOOR, max_iter, tol, active, messages, dtype,
                              n_threads, block, freeze, sending, fused)
             states = out[4] if fused else states  # fused: the certain cells the packing found
         else:
