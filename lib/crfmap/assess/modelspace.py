@@ -49,7 +49,7 @@ def symmetric_tables(split, couplings, link_strengths, margin=None, group="all",
     pairs = [(i, j) for i in range(shape[0]) for j in range(shape[1])]
     for i, j in tqdm(pairs, desc="phase diagram", disable=not progress, leave=False):
         beliefs, result = table_refine(split, couplings[i], link_strengths[j], margin)
-        s = score(split, {"p": beliefs}, n_boot=0)["p"][group]
+        s = score(split, {"p": beliefs}, n_boot=0, groups=(group,), metrics=("brier", "wall_recall"))["p"][group]
         out["brier"][i, j], out["wall_recall"][i, j] = s["brier"], s["wall_recall"]
         out["converged"][i, j] = result.converged
     out["couplings"], out["link_strengths"] = np.asarray(couplings, float), np.asarray(link_strengths, float)
@@ -71,7 +71,7 @@ def fit_scaled(split, couplings, scales) -> tuple:
     for j in couplings:
         for s in scales:
             b = scaled_preset(j, s).refine(hits=split.first_hits, passes=split.first_passes).beliefs.probability
-            value = score(split, {"p": b}, n_boot=0)["p"]["all"]["brier"]
+            value = score(split, {"p": b}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
             if value < best:
                 best, arg = value, (float(j), float(s))
     return arg
