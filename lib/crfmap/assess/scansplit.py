@@ -322,7 +322,8 @@ def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, bloc
     """Score every baseline (:func:`crfmap.assess.baselines.all_baselines`) and ``preset`` on a split.
 
     Returns the :func:`score` dictionary with ``"raw"`` as the paired reference; the preset's
-    LBP result summary is under ``"_lbp"``. ``extra`` adds more ``{name: P}`` rows.
+    LBP result summary is under ``"_lbp"`` and every scored ``{name: P}`` under ``"_beliefs"``.
+    ``extra`` adds more ``{name: P}`` rows.
     """
     from crfmap.assess.baselines import all_baselines
     from crfmap.crf.presets import get_preset
@@ -334,6 +335,7 @@ def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, bloc
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
     out["_lbp"] = {"converged": result.converged, "iterations": result.iterations,
                    "last_change": result.last_change}
+    out["_beliefs"] = predictions
     return out
 
 
