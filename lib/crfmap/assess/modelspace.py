@@ -86,12 +86,16 @@ def scaled_preset(coupling, scale, base="certainty"):
                    free=tuple(scale * v for v in p.free))
 
 
-def scaled_scores(split, couplings, scales) -> dict:
-    """{(J, scale): scan-split Brier score (all cells)} of :func:`scaled_preset` on ``split``, J outer."""
+def scaled_scores(split, couplings, scales, dtype=np.float32) -> dict:
+    """{(J, scale): scan-split Brier score (all cells)} of :func:`scaled_preset` on ``split``, J outer.
+
+    LBP in ``dtype`` (float32: half the bytes; the scores move by about 1e-8).
+    """
     out = {}
     for j in couplings:
         for s in scales:
-            b = scaled_preset(j, s).refine(hits=split.first_hits, passes=split.first_passes).beliefs.probability
+            b = scaled_preset(j, s).refine(hits=split.first_hits, passes=split.first_passes,
+                                           dtype=dtype).beliefs.probability
             scored = score(split, {"p": b}, n_boot=0, groups=("all",), metrics=("brier",))
             out[(float(j), float(s))] = scored["p"]["all"]["brier"]
     return out
