@@ -109,6 +109,17 @@ def test_a_subset_of_groups_and_metrics_equals_the_full_result():
         score(sp, preds, groups=("walls",))
 
 
+def test_compare_keeps_the_grids_it_scored_only_when_asked():
+    from crfmap.assess.scansplit import compare
+
+    sp = ScanSplit(*(np.random.default_rng(6).integers(0, 3, (20, 20)) for _ in range(4)))
+    kept = compare(sp, n_boot=0, keep_beliefs=True)
+    assert "_beliefs" not in compare(sp, n_boot=0)  # plain results stay JSON-friendly (crfmap evaluate --json)
+    np.testing.assert_array_equal(kept["_beliefs"]["raw"], sp.raw_probability())
+    again = score(sp, {"certainty": kept["_beliefs"]["certainty"]}, n_boot=0)["certainty"]["all"]["brier"]
+    assert again == kept["certainty"]["all"]["brier"]
+
+
 def test_bad_input_is_named():
     sp = ScanSplit(*(np.zeros((2, 2), int) for _ in range(4)))
     with pytest.raises(InputError, match="shape"):

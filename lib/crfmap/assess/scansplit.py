@@ -318,12 +318,12 @@ def _interval(values, alpha):
 
 
 def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, block: int = DEFAULT_BLOCK,
-            seed: int = 0, extra: dict | None = None) -> dict:
+            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False) -> dict:
     """Score every baseline (:func:`crfmap.assess.baselines.all_baselines`) and ``preset`` on a split.
 
     Returns the :func:`score` dictionary with ``"raw"`` as the paired reference; the preset's
-    LBP result summary is under ``"_lbp"`` and every scored ``{name: P}`` under ``"_beliefs"``.
-    ``extra`` adds more ``{name: P}`` rows.
+    LBP result summary is under ``"_lbp"``; ``keep_beliefs``: every scored ``{name: P}`` under
+    ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more ``{name: P}`` rows.
     """
     from crfmap.assess.baselines import all_baselines
     from crfmap.crf.presets import get_preset
@@ -335,7 +335,8 @@ def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, bloc
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
     out["_lbp"] = {"converged": result.converged, "iterations": result.iterations,
                    "last_change": result.last_change}
-    out["_beliefs"] = predictions
+    if keep_beliefs:
+        out["_beliefs"] = predictions
     return out
 
 
