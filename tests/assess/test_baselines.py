@@ -47,3 +47,14 @@ def test_all_baselines_names_and_ranges():
     assert set(out) == {"raw", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut"}  # no scans: no log-odds
     for name, p in out.items():
         assert p.shape == (20, 20) and p.min() >= 0 and p.max() <= 1, name
+
+
+def test_window_median_equals_numpys_nanmedian_of_each_window():
+    import warnings
+
+    p = np.random.default_rng(3).choice([0.1, 0.3, 0.5, 0.5, 0.7, 0.95], size=(17, 23))
+    padded = np.pad(np.where(p == 0.5, np.nan, p), 1, constant_values=np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-unknown windows
+        want = np.array([[np.nanmedian(padded[y:y + 3, x:x + 3]) for x in range(23)] for y in range(17)])
+    np.testing.assert_array_equal(window_median(p), np.where(np.isnan(want), 0.5, want))

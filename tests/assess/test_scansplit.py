@@ -76,6 +76,50 @@ def test_bootstrap_is_seeded_covers_the_estimate_and_pairs_differences():
     assert a["half"]["all"]["brier"] == pytest.approx(0.25)
 
 
+def test_resampled_metrics_equal_one_resample_at_a_time():
+    """The compiled all-resamples path against the per-resample reference (_Scorer.metrics)."""
+    from crfmap.assess.scansplit import _Scorer
+
+    rng = np.random.default_rng(4)
+    n, n_blocks = 500, 23
+    p = np.round(rng.uniform(0, 1, n), 2)  # ties on purpose
+    y = (rng.uniform(0, 1, n) < p).astype(float)
+    inverse = rng.integers(0, n_blocks, n)
+    draws = np.array([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks) for _ in range(30)],
+                     dtype=float)
+    scorer = _Scorer(p, y, inverse, n_blocks)
+    fast = scorer.resampled(draws)
+    for k, w in enumerate(draws):
+        one = scorer.metrics(w)
+        for m in ("brier", "logloss", "auc", "wall_recall"):
+            assert fast[m][k] == pytest.approx(one[m], rel=1e-12)
+
+
+def test_a_subset_of_groups_and_metrics_equals_the_full_result():
+    rng = np.random.default_rng(5)
+    sp = ScanSplit(*(rng.integers(0, 3, (40, 40)) for _ in range(4)))
+    preds = {"raw": sp.raw_probability(), "half": np.full((40, 40), 0.5)}
+    full = score(sp, preds, n_boot=20, block=8, seed=1, reference="raw")
+    part = score(sp, preds, n_boot=20, block=8, seed=1, reference="raw", groups=("unseen",), metrics=("brier",))
+    assert list(part["half"]) == ["unseen"]
+    assert part["half"]["unseen"]["brier_ci"] == full["half"]["unseen"]["brier_ci"]  # same resamples
+    assert part["half"]["unseen"]["brier_diff"] == full["half"]["unseen"]["brier_diff"]
+    assert "auc" not in part["half"]["unseen"]
+    with pytest.raises(InputError, match="subsets"):
+        score(sp, preds, groups=("walls",))
+
+
+def test_compare_keeps_the_grids_it_scored_only_when_asked():
+    from crfmap.assess.scansplit import compare
+
+    sp = ScanSplit(*(np.random.default_rng(6).integers(0, 3, (20, 20)) for _ in range(4)))
+    kept = compare(sp, n_boot=0, keep_beliefs=True)
+    assert "_beliefs" not in compare(sp, n_boot=0)  # plain results stay JSON-friendly (crfmap evaluate --json)
+    np.testing.assert_array_equal(kept["_beliefs"]["raw"], sp.raw_probability())
+    again = score(sp, {"certainty": kept["_beliefs"]["certainty"]}, n_boot=0)["certainty"]["all"]["brier"]
+    assert again == kept["certainty"]["all"]["brier"]
+
+
 def test_bad_input_is_named():
     sp = ScanSplit(*(np.zeros((2, 2), int) for _ in range(4)))
     with pytest.raises(InputError, match="shape"):

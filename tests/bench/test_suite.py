@@ -124,3 +124,13 @@ def test_coarse_start_option_is_one_that_changes_the_start():
         obs = bench.bench_grid(256, kind="office")
         assert not np.array_equal(infer(obs, max_iter=1, tol=0.0, **option).beliefs.probability,
                                   infer(obs, max_iter=1, tol=0.0).beliefs.probability)
+
+
+def test_the_reproductions_lighter_settings_reach_the_records():
+    records = list(bench.run(sizes=(64,), quick=True, repeats=1, threads=(1,), progress=False, online=False,
+                             memory=False, external=False, goals=False, work=4096 * 32, bandwidth_mbytes=8,
+                             converge_runs=1, cold=False))
+    assert {r["mbytes_per_array"] for r in records if r["method"] == "memory-bandwidth"} == {8}
+    fast = [r for r in records if r["method"] == "crfmap-fast"]
+    assert fast and all(r["iterations_timed"] == 32 for r in fast)  # work / cells, a multiple of the block
+    assert [r["cache"] for r in records if r["method"] == "jit-compile"] == ["warm"]  # no empty-cache child

@@ -6,7 +6,7 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 - :mod:`crfmap.assess.crossval`: ``cross_validate``, ``CrossValidation``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean``
 - :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score``, ``compare`` (validation on scans the map never saw)
 - :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
-- :mod:`crfmap.assess.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``fit_pseudolikelihood``
+- :mod:`crfmap.assess.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``scaled_scores``, ``fit_pseudolikelihood``
 - :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
@@ -43,6 +43,7 @@ _API = {
     "graph_cut": "baselines",
     "symmetric_tables": "modelspace",
     "fit_scaled": "modelspace",
+    "scaled_scores": "modelspace",
     "fit_pseudolikelihood": "modelspace",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)

@@ -16,8 +16,6 @@
 """
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
 from crfmap.errors import InputError
@@ -56,12 +54,12 @@ def window_median(grid) -> np.ndarray:
     [[0.5, 0.2, 0.15]]
     """
     p = _check(grid)
-    win = _windows(np.where(p == UNKNOWN, np.nan, p), np.nan)
-    known = np.isfinite(win).any(axis=0)
-    with warnings.catch_warnings():  # an all-unknown window: NaN, replaced below
-        warnings.simplefilter("ignore", RuntimeWarning)
-        med = np.nanmedian(win, axis=0)
-    return np.where(known, med, UNKNOWN)
+    win = np.sort(_windows(np.where(p == UNKNOWN, np.nan, p), np.nan), axis=0)  # NaN (unknown) sorts last
+    n = np.isfinite(win).sum(axis=0)
+    # the middle one (odd n) or the mean of the middle two (even n) of the n known values: np.nanmedian's value
+    low = np.take_along_axis(win, np.maximum(n - 1, 0)[None] // 2, axis=0)[0]
+    high = np.take_along_axis(win, (n // 2)[None], axis=0)[0]
+    return np.where(n > 0, np.where(n % 2 == 1, high, (low + high) / 2), UNKNOWN)
 
 
 def grey_closing(grid) -> np.ndarray:

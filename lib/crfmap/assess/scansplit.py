@@ -37,6 +37,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
@@ -159,27 +160,44 @@ def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress:
 class _Scorer:
     """The metrics of one prediction on one group of cells, fast under block resampling.
 
-    Brier, log-loss and recall are sums, kept per bootstrap block; the AUC sorts once and
-    reweights the sorted cells per resample.
+    Brier, log-loss and recall are sums, kept per bootstrap block (all resamples at once are one
+    matrix product); the AUC sorts once (only when asked for) and reweights the sorted cells per
+    resample in a compiled loop.
     """
 
-    def __init__(self, p, y, inverse, n_blocks):
+    def __init__(self, p, y, inverse, n_blocks, auc=True):
         q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
         per_cell = np.stack([np.ones_like(p), (p - y) ** 2, -(y * np.log(q) + (1 - y) * np.log(1 - q)),
                              y, y * (p > 0.5)])
         self.sums = np.stack([np.bincount(inverse, weights=row, minlength=n_blocks) for row in per_cell])
-        order = np.argsort(p, kind="stable")
-        self.y, self.inverse = y[order], inverse[order]
-        self.starts = np.concatenate([[0], np.flatnonzero(np.diff(p[order])) + 1])  # runs of equal P
+        self.with_auc = auc
+        if auc:
+            order = np.argsort(p, kind="stable")
+            self.y, self.inverse = y[order], inverse[order]
+            self.starts = np.concatenate([[0], np.flatnonzero(np.diff(p[order])) + 1])  # runs of equal P
 
     def metrics(self, block_weights=None) -> dict:
         s = self.sums.sum(axis=1) if block_weights is None else self.sums @ block_weights
-        w = np.ones(len(self.y)) if block_weights is None else block_weights[self.inverse]
         n, walls = s[0], s[3]
         if n <= 0:
             return dict.fromkeys(METRICS, float("nan"))
-        return {"brier": float(s[1] / n), "logloss": float(s[2] / n), "auc": self._auc(w),
-                "wall_recall": float(s[4] / walls) if walls > 0 else float("nan")}
+        out = {"brier": float(s[1] / n), "logloss": float(s[2] / n),
+               "wall_recall": float(s[4] / walls) if walls > 0 else float("nan")}
+        if self.with_auc:
+            w = np.ones(len(self.y)) if block_weights is None else block_weights[self.inverse]
+            out["auc"] = self._auc(w)
+        return out
+
+    def resampled(self, draws) -> dict:
+        """{metric: array over resamples} for block weights ``draws`` [n_boot, n_blocks]."""
+        s = self.sums @ draws.T  # [5, n_boot]
+        n, walls = s[0], s[3]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = {"brier": np.where(n > 0, s[1] / n, np.nan), "logloss": np.where(n > 0, s[2] / n, np.nan),
+                   "wall_recall": np.where((n > 0) & (walls > 0), s[4] / walls, np.nan)}
+        if self.with_auc:
+            out["auc"] = _auc_resampled(self.y, self.inverse, self.starts.astype(np.int64), draws)
+        return out
 
     def _auc(self, w):
         """Mann-Whitney AUC: a wall beats every free cell with lower P, ties count one half."""
@@ -190,6 +208,29 @@ class _Scorer:
         pos_g, neg_g = np.add.reduceat(pos, self.starts), np.add.reduceat(neg, self.starts)
         neg_below = np.cumsum(neg_g) - neg_g
         return float(np.sum(pos_g * (neg_below + 0.5 * neg_g)) / (n_pos * n_neg))
+
+
+@njit(cache=True)
+def _auc_resampled(y, inverse, starts, draws):  # pragma: no cover - compiled; tested against _Scorer._auc
+    """:meth:`_Scorer._auc` for every row of block weights ``draws``, cells sorted by P."""
+    n_boot, n, n_runs = draws.shape[0], y.size, starts.size
+    out = np.empty(n_boot)
+    for k in range(n_boot):
+        w = draws[k]
+        total = neg_below = n_pos = n_neg = 0.0
+        for r in range(n_runs):
+            end = starts[r + 1] if r + 1 < n_runs else n
+            pos_g = neg_g = 0.0
+            for i in range(starts[r], end):
+                wi = w[inverse[i]]
+                pos_g += wi * y[i]
+                neg_g += wi * (1.0 - y[i])
+            total += pos_g * (neg_below + 0.5 * neg_g)
+            neg_below += neg_g
+            n_pos += pos_g
+            n_neg += neg_g
+        out[k] = total / (n_pos * n_neg) if n_pos > 0 and n_neg > 0 else np.nan
+    return out
 
 
 def _block_ids(shape, block):
@@ -209,12 +250,19 @@ def _values(pred, shape, name):
 
 
 def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = DEFAULT_BLOCK, seed: int = 0,
-          reference: str | None = None, level: float = 0.95) -> dict:
+          reference: str | None = None, level: float = 0.95, groups=GROUPS, metrics=METRICS) -> dict:
     """Score predictions ``{name: [y, x] P(occupied)}`` against the second half, with intervals.
 
     Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), ...}}}``; with a
     ``reference`` name, also ``metric + "_diff"`` (name minus reference) and its interval
-    ``metric + "_diff_ci"`` from the same (paired) resamples. ``n_boot=0`` skips the intervals.
+    ``metric + "_diff_ci"`` from the same (paired) resamples. ``n_boot=0`` skips the intervals;
+    ``groups`` and ``metrics`` limit the work to what is asked for (without ``"auc"`` nothing is
+    sorted).
+
+    >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))
+    >>> s = score(sp, {"raw": sp.raw_probability()}, n_boot=0, groups=("all",), metrics=("brier",))
+    >>> list(s["raw"]), sorted(s["raw"]["all"])
+    (['all'], ['brier', 'cells', 'walls'])
     """
     if not predictions:
         raise InputError("predictions", "nothing to score")
@@ -224,36 +272,40 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
         raise InputError("n_boot", f"must be a non-negative integer, got {n_boot!r}")
     if not (isinstance(block, (int, np.integer)) and block >= 1):
         raise InputError("block", f"must be a positive integer, got {block!r}")
+    unknown = [g for g in groups if g not in GROUPS] + [m for m in metrics if m not in METRICS]
+    if unknown or not groups or not metrics:
+        raise InputError("groups/metrics", f"must be non-empty subsets of {GROUPS} and {METRICS}, "
+                         f"got {unknown or 'none'}")
     probs = {name: _values(p, split.shape, name) for name, p in predictions.items()}
     labels = split.labels().astype(np.float64)
     blocks = _block_ids(split.shape, block)
     rng = np.random.default_rng(seed)
     alpha = (1 - level) / 2
     out = {name: {} for name in probs}
-    for group in GROUPS:
+    for group in GROUPS:  # every group draws its resamples, asked for or not: the same seed gives the same intervals
         mask = split.group(group)
         y = labels[mask]
         ids = blocks[mask]
         uniq, inverse = np.unique(ids, return_inverse=True)
         # resample blocks: a block's weight is how often it was drawn
-        draws = [np.bincount(rng.integers(0, len(uniq), len(uniq)), minlength=len(uniq)).astype(np.float64)
-                 for _ in range(n_boot)] if len(uniq) else []
+        draws = np.array([np.bincount(rng.integers(0, len(uniq), len(uniq)), minlength=len(uniq))
+                          for _ in range(n_boot)], dtype=np.float64).reshape(-1, len(uniq)) if len(uniq) else None
+        if group not in groups:
+            continue
         boot = {}
         for name, p in probs.items():
-            scorer = _Scorer(p[mask], y, inverse, len(uniq))
-            out[name][group] = dict(scorer.metrics(), cells=int(mask.sum()), walls=int(y.sum()))
-            boot[name] = {}
-            if draws:
-                rows = [scorer.metrics(w) for w in draws]
-                boot[name] = {m: np.array([r[m] for r in rows]) for m in METRICS}
+            scorer = _Scorer(p[mask], y, inverse, len(uniq), auc="auc" in metrics)
+            values = scorer.metrics()
+            out[name][group] = dict({m: values[m] for m in metrics}, cells=int(mask.sum()), walls=int(y.sum()))
+            boot[name] = scorer.resampled(draws) if draws is not None and n_boot else {}
         for name in probs:
             entry = out[name][group]
-            for m in METRICS:
-                if draws:
+            for m in metrics:
+                if boot[name]:
                     entry[m + "_ci"] = _interval(boot[name][m], alpha)
                 if reference is not None:
                     entry[m + "_diff"] = entry[m] - out[reference][group][m]
-                    if draws:
+                    if boot[name]:
                         entry[m + "_diff_ci"] = _interval(boot[name][m] - boot[reference][m], alpha)
     return out
 
@@ -266,11 +318,12 @@ def _interval(values, alpha):
 
 
 def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, block: int = DEFAULT_BLOCK,
-            seed: int = 0, extra: dict | None = None) -> dict:
+            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False) -> dict:
     """Score every baseline (:func:`crfmap.assess.baselines.all_baselines`) and ``preset`` on a split.
 
     Returns the :func:`score` dictionary with ``"raw"`` as the paired reference; the preset's
-    LBP result summary is under ``"_lbp"``. ``extra`` adds more ``{name: P}`` rows.
+    LBP result summary is under ``"_lbp"``; ``keep_beliefs``: every scored ``{name: P}`` under
+    ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more ``{name: P}`` rows.
     """
     from crfmap.assess.baselines import all_baselines
     from crfmap.crf.presets import get_preset
@@ -282,6 +335,8 @@ def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, bloc
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
     out["_lbp"] = {"converged": result.converged, "iterations": result.iterations,
                    "last_change": result.last_change}
+    if keep_beliefs:
+        out["_beliefs"] = predictions
     return out
 
 

@@ -92,14 +92,15 @@ def _time_infer(folder, cache):
     return seconds
 
 
-def start_times(quick=False) -> list:
-    """``crfmap infer`` in a new process: empty cache (not quick), warmed cache, environment's cache."""
+def start_times(quick=False, cold=None) -> list:
+    """``crfmap infer`` in a new process: empty cache (``cold``; default: not quick), warmed cache, environment's."""
+    cold_run = (not quick) if cold is None else cold
     out = []
     with tempfile.TemporaryDirectory() as folder:
         np.save(Path(folder) / "map.npy", bench_grid(START_MAP_SIZE, kind="office"))
         common = dict(map_size=START_MAP_SIZE, command="crfmap infer map.npy beliefs.npy")
         env_seconds = _time_infer(folder, None)
-        if quick:  # compiling every kernel takes a minute: the environment's cache, now warm, stands in
+        if not cold_run:  # compiling every kernel takes a minute: the environment's cache, now warm, stands in
             cold, warm = None, _time_infer(folder, None)
         else:
             cache = Path(folder) / "numba-cache"
@@ -111,10 +112,10 @@ def start_times(quick=False) -> list:
                           minus_warm_seconds=cold - warm, goal_seconds=START_GOAL, **common))
     else:
         out.append(record("start-cold", START_MAP_SIZE, None, None, None, seconds=None, cache="empty",
-                          note="skipped in quick runs (compiling every kernel takes about a minute)", **common))
-    out.append(record("start-warm", START_MAP_SIZE, None, None, None, seconds=warm,
-                      cache="the environment's, after the first run" if quick else "the empty one, after the first run",
-                      **common))
+                          note="skipped (quick run or cold=False): compiling every kernel takes about a minute; "
+                          "`crfmap bench` measures it", **common))
+    warmed = "the empty one, after the first run" if cold_run else "the environment's, after the first run"
+    out.append(record("start-warm", START_MAP_SIZE, None, None, None, seconds=warm, cache=warmed, **common))
     out.append(record("start-env", START_MAP_SIZE, None, None, None, seconds=env_seconds,
                       cache=os.environ.get("NUMBA_CACHE_DIR", "numba's default (__pycache__ beside the modules)"),
                       minus_warm_seconds=env_seconds - warm, **common,
@@ -224,20 +225,24 @@ def coarse_start_option():
     return None
 
 
-def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000) -> list:
-    """Time and iterations to convergence from the plain start and (when infer has one) a coarse one."""
+def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000, runs=2) -> list:
+    """Time and iterations to convergence from the plain start and (when infer has one) a coarse one.
+
+    Each start first runs once on a 512² corner (loading or compiling its kernels), then the best
+    of ``runs`` timed runs on the full grid is kept.
+    """
     from crfmap.crf.lbp import infer
 
     obs = bench_grid(size, kind="office")
-    runs = {"uniform": {}}
+    starts = {"uniform": {}}
     option = coarse_start_option()
     if option is not None:
-        runs[", ".join(f"{k}={v}" for k, v in option.items())] = option
+        starts[", ".join(f"{k}={v}" for k, v in option.items())] = option
     results = {}
-    for name, kwargs in runs.items():
-        # the better of two runs: the first also compiles (or loads) whatever kernels this size takes
-        results[name] = min((infer(obs, tol=tol, max_iter=max_iter, dtype=np.float32, threads=threads, **kwargs)
-                             for _ in range(2)), key=lambda r: r.seconds)
+    for name, kwargs in starts.items():
+        options = dict(tol=tol, max_iter=max_iter, dtype=np.float32, threads=threads, **kwargs)
+        infer(obs[:512, :512].copy(), **options)  # warm-up: kernel loading is not convergence time
+        results[name] = min((infer(obs, **options) for _ in range(max(runs, 1))), key=lambda r: r.seconds)
     plain = results["uniform"]
     out = []
     for name, r in results.items():

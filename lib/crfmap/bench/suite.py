@@ -28,7 +28,7 @@ Methods:
 - ``pgmax-bp`` / ``pymaxflow-map``: when installed, PGMax's LBP and a PyMaxflow graph cut on the
   same model (:mod:`crfmap.bench.external`); a "not installed" record otherwise.
 - ``jit-compile``: the first calls of :func:`crfmap.crf.lbp.infer` in a new process, with an empty
-  numba cache (compilation; not in quick runs) and with the package's cache.
+  numba cache (compilation; not in quick runs, nor with ``cold=False``) and with the package's cache.
 - issue 13's goals (``goals=True``, :mod:`crfmap.bench.goals`): ``infer-vs-kernel`` (per size),
   ``start-cold`` / ``start-warm`` / ``start-env``, ``explorer-redraw`` / ``explorer-scene-change``,
   ``reproduce`` (read from the last run's record) and ``converge-start`` (4096², quick 256²).
@@ -143,13 +143,13 @@ def agreement(size=96, iterations=7, seed=1) -> dict:
                   max_difference_plain_vs_fast=float(np.abs(plain.beliefs.probability - fast.beliefs.probability).max()))
 
 
-def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL):
-    """Time to convergence on the noisy office floor, with and without frozen tiles."""
+def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL, runs=2):
+    """Time to convergence on the noisy office floor, with and without frozen tiles (best of ``runs``)."""
     obs = bench_grid(size, kind="office")
     out = []
     exact = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, freeze=0.0)
-    fast = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads)
-    fast = min((fast, infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads)), key=lambda r: r.seconds)
+    fast = min((infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads) for _ in range(max(runs, 1))),
+               key=lambda r: r.seconds)
     diff = float(np.abs(fast.beliefs.probability - exact.beliefs.probability).max())
     for name, r in (("converge", fast), ("converge-exact", exact)):
         out.append(record(f"crfmap-{name}", size, np.float32, threads, r.seconds / max(r.iterations, 1),
@@ -226,13 +226,26 @@ def compile_seconds(cold=True) -> dict:
 
 
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
-        external=True, goals=True):
-    """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI)."""
+        external=True, goals=True, work=None, cold=None, external_max_size=EXTERNAL_MAX_SIZE, explorer_changes=None,
+        converge_runs=2, online_tol=None, bandwidth_mbytes=None):
+    """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI).
+
+    The reproduction's lighter settings (notebook 09 says which it used): ``work`` cell updates
+    per timed repeat (default :data:`WORK`), ``cold=False`` skips the two child processes that
+    compile every kernel into an empty numba cache (about a minute each; default: not quick),
+    ``external_max_size`` caps the PGMax / PyMaxflow grids, ``explorer_changes`` the widget
+    changes timed (default 36, quick 6) and ``converge_runs`` the timed runs per convergence
+    measurement (the best is kept; a smaller warm-up run loads the kernels first); ``online_tol``
+    the tolerance of the online run's final map against the offline one (default 1e-7);
+    ``bandwidth_mbytes`` the size of each array of the bandwidth triad (default 256, quick 64).
+    """
     from tqdm.auto import tqdm
 
     sizes = tuple(sizes or (QUICK_SIZES if quick else SIZES))
     repeats = repeats or (2 if quick else 5)
-    work = QUICK_WORK if quick else WORK
+    work = work or (QUICK_WORK if quick else WORK)
+    cold = (not quick) if cold is None else cold
+    explorer_changes = explorer_changes or (6 if quick else 36)
     converge_sizes = [s for s in (QUICK_CONVERGE_SIZES if quick else CONVERGE_SIZES) if s <= max(sizes)] or [min(sizes)]
     tasks = [("machine", None), ("compile", None)]
     tasks += [("throughput", s) for s in sizes]
@@ -254,13 +267,14 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         if kind == "machine":
             yield agreement()
             for th in threads:
-                bw = memory_bandwidth(th, 64 if quick else 256)
+                bw = memory_bandwidth(th, bandwidth_mbytes or (64 if quick else 256))
                 yield record("memory-bandwidth", None, None, th, None, gbytes_per_second=bw,
+                             mbytes_per_array=bandwidth_mbytes or (64 if quick else 256),
                              bound_mcells_per_second={k: bw * 1e3 / v for k, v in BYTES_PER_CELL_PASS.items()},
                              note="STREAM-style triad a = b + s c, 3 x 8 bytes per element counted "
                              "(write-allocate traffic not counted)")
         elif kind == "compile":
-            if not quick:
+            if cold:
                 yield compile_seconds(cold=True)
             yield compile_seconds(cold=False)
         elif kind == "throughput":
@@ -281,25 +295,26 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             if size <= 512:
                 yield bench_plain(size, 1, top)
         elif kind == "converge":
-            yield from bench_converge(size, max(threads), with_plain=size <= (256 if quick else 512))
+            yield from bench_converge(size, max(threads), with_plain=size <= (256 if quick else 512),
+                                      runs=converge_runs)
         elif kind == "memory":
             yield peak_memory_per_cell(size)
         elif kind == "online":
             from crfmap.bench.online import bench_online
 
-            yield from bench_online(quick=quick)
+            yield from bench_online(quick=quick, final_tol=online_tol)
         elif kind == "external":
             from crfmap.bench.external import run_external
 
-            yield from run_external([s for s in sizes if s <= EXTERNAL_MAX_SIZE] or [min(sizes)], repeats, quick)
+            yield from run_external([s for s in sizes if s <= external_max_size] or [min(sizes)], repeats, quick)
         elif kind == "start":
-            yield from G.start_times(quick)
+            yield from G.start_times(quick, cold=cold)
         elif kind == "explorer":
-            yield from G.explorer_redraw(6 if quick else 36)
+            yield from G.explorer_redraw(explorer_changes)
         elif kind == "reproduce":
             yield G.reproduce_record()
         elif kind == "converge-start":
-            yield from G.converge_start(size, max(threads))
+            yield from G.converge_start(size, max(threads), runs=converge_runs)
 
 
 def format_record(rec) -> str:
