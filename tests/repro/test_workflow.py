@@ -197,7 +197,7 @@ def test_notebooks_run_longest_first_and_a_benchmark_alone(tmp_path, fake_data):
     assert set(rules) == {nb.stem for nb in deps.notebooks()}
     order = sorted(rules, key=lambda stem: -rules[stem]["priority"])
     assert order.index("07_office") < order.index("08_explorer") and order[-1] == "08_explorer"  # shortest last
-    assert rules["09_speed"]["threads"] == 2  # all of --cores 2: nothing runs beside the speed notebook
+    assert rules["09_speed"]["threads"] == 2 and order[0] == "09_speed"  # all of --cores 2, first: nothing beside it
     assert all(r["threads"] == 1 for stem, r in rules.items() if stem != "09_speed")
 
 
