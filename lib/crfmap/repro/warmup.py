@@ -4,7 +4,8 @@
 functions that reach every numba kernel the command line and the notebooks use (:data:`TASKS`):
 ``crfmap infer`` on a tiny grid with every schedule, in float64 and float32 and with ``--margin``;
 :func:`crfmap.crf.lbp.infer` on a grid large enough for the parallel pass; the grid builder and the
-online mapper on a few synthetic scans; the simulator with every drive and with noise. That compiles
+online mapper on a few synthetic scans; the simulator with every drive and with noise; the benchmarks'
+bandwidth kernel. That compiles
 (or loads) them into the cache every entry point of the environment shares (``NUMBA_CACHE_DIR``, set
 for the shell by make, for the command line by the venv's ``crfmap_numba_cache.pth`` and for Jupyter by
 the kernel spec; see the Makefile). Compiling is single-threaded, so the tasks are shared out over
@@ -31,7 +32,7 @@ from pathlib import Path
 KERNEL_MODULES = ("crf/_lbp_fast.py", "crf/_lbp_kernels.py")  # numba modules with cache=True the LBP calls use
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
-NUMBA_SOURCES = ("crf", "mapping", "sim", "world/reachability.py", "raycast.py")
+NUMBA_SOURCES = ("crf", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py")
 
 
 def cache_dir() -> Path | None:
@@ -146,6 +147,8 @@ def _large_grid(dtype):
 
 def _mapping():
     """The grid builder (both models) and the online mapper (with and without a margin) on synthetic scans."""
+    from dataclasses import replace
+
     import numpy as np
 
     from crfmap.mapping.builder import build_grid
@@ -158,8 +161,10 @@ def _mapping():
     ranges[:, ::17] = np.inf  # no returns
     poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
     scans = ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+    every_other = replace(scans, ranges=scans.ranges[::2], laser_poses=scans.laser_poses[::2], stamps=scans.stamps[::2])
     for model in ("arctan", "logodds"):
         build_grid(scans, 0.1, model=model)
+        build_grid(every_other, 0.1, model=model)  # strided views: another compiled signature
     for margin in (None, 2):
         mapper = OnlineMapper.for_scans(scans, 0.1, margin=margin)
         for i in range(n):
@@ -188,6 +193,13 @@ def _simulator():
              progress=False)
 
 
+def _bandwidth():
+    """The streaming-bandwidth kernel of the benchmarks (the speed notebook's and ``crfmap bench``'s bound)."""
+    from crfmap.bench.common import memory_bandwidth
+
+    memory_bandwidth(1, mbytes=1, repeats=1)
+
+
 # name -> (callable, seconds it took on an empty cache on 2 busy cores; to share the tasks out, longest first).
 # The parallel pass (the large grids) is the costliest kernel: float64 and float32 go to different processes.
 TASKS = {
@@ -200,6 +212,7 @@ TASKS = {
     "large grids float32": (_large_grid("float32"), 75.0),
     "mapping": (_mapping, 8.0),
     "simulator": (_simulator, 4.0),
+    "bandwidth": (_bandwidth, 4.0),
 }
 
 
