@@ -31,7 +31,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 warm: $(STAMP)
-	$(BIN)/python -m crfmap.repro.warmup
+	$(BIN)/python -m crfmap.repro.warmup --jobs $(CORES)
 
 test: warm
 	$(BIN)/python -m pytest -q

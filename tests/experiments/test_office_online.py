@@ -84,6 +84,10 @@ def test_near_observations_compare_on_the_mappers_region():
     assert numbers["margin_cells"] == 2 and numbers["region_cells"] == region.sum() < region.size
     assert numbers["weak_converged"] and numbers["weak_max_abs_belief_difference"] < 1e-4
     assert 0.0 <= numbers["default_same_state_fraction"] <= 1.0
+    capped = near_versus_offline(scans, 0.1, offline_grid, WEAK, near, tol=1e-12, cold_max_iter=3)
+    cold = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=1e-12, max_iter=3, dtype=np.float32, region=region)
+    assert capped["default_offline_iterations"] == 3  # the cold default-table run stops at its own cap
+    assert capped["default_offline_last_max_change"] == float(cold.max_change[np.isfinite(cold.max_change)][-1])
 
 
 def test_default_table_drift_counts_what_moves():

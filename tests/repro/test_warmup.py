@@ -11,3 +11,23 @@ def test_an_empty_cache_is_cold_and_a_fresh_stamp_is_warm(tmp_path, monkeypatch)
     for relative in warmup.KERNEL_MODULES:  # an index newer than its source: that module is cached
         (tmp_path / "cache" / f"{relative.split('/')[-1][:-3]}.kernel-1.py311.nbi").touch()
     assert not warmup.is_cold()
+
+
+def test_the_tasks_are_shared_out_evenly_and_unknown_ones_refused():
+    import pytest
+
+    groups = warmup.share(list(warmup.TASKS), 2)
+    assert sorted(t for g in groups for t in g) == sorted(warmup.TASKS)
+    load = [sum(warmup.TASKS[t][1] for t in g) for g in groups]
+    assert max(load) - min(load) <= max(cost for _, cost in warmup.TASKS.values())
+    assert warmup.share(["sweep"], 4) == [["sweep"]]  # no empty processes
+    with pytest.raises(ValueError, match="unknown warm-up task"):
+        warmup.run_tasks(["no such task"])
+
+
+def test_every_module_with_cached_numba_kernels_is_watched():
+    """A change to any module holding ``cache=True`` kernels makes the cache cold again."""
+    watched = {p.resolve() for p in warmup._sources()}
+    kernels = {p.resolve() for p in warmup.LIBRARY.rglob("*.py")
+               if "cache=True" in p.read_text() and p.name != "_numba_cache.py"}
+    assert kernels and kernels <= watched, sorted(str(p) for p in kernels - watched)

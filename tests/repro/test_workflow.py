@@ -183,3 +183,36 @@ def test_jupyter_kernel_uses_the_numba_cache_make_warms():
 
     spec = KernelSpecManager().get_kernel_spec("python3")
     assert spec.env.get("NUMBA_CACHE_DIR") == os.environ["NUMBA_CACHE_DIR"]
+
+
+def test_notebooks_run_longest_first_and_a_benchmark_alone(tmp_path, fake_data):
+    done = snakemake("--dry-run", cwd=tmp_path / "out")
+    rules, current = {}, None
+    for line in (done.stdout + done.stderr).splitlines():
+        if line.startswith("rule notebook_"):
+            current = rules.setdefault(line[len("rule notebook_"):].rstrip(":"), {"threads": 1})
+        elif current is not None and line.strip().startswith(("priority:", "threads:")):
+            key, value = line.strip().split(":")
+            current[key] = int(value)
+    assert set(rules) == {nb.stem for nb in deps.notebooks()}
+    order = sorted(rules, key=lambda stem: -rules[stem]["priority"])
+    assert order.index("07_office") < order.index("08_explorer") and order[-1] == "08_explorer"  # shortest last
+    assert rules["09_speed"]["threads"] == 2 and order[0] == "09_speed"  # all of --cores 2, first: nothing beside it
+    assert all(r["threads"] == 1 for stem, r in rules.items() if stem != "09_speed")
+
+
+def test_a_notebook_runs_with_the_threads_its_rule_got(checkout_copy, tmp_path):
+    probe = {"cells": [
+        {"cell_type": "code", "metadata": {"tags": ["parameters"]}, "source": "quick = False", "outputs": [],
+         "execution_count": None},
+        {"cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None,
+         "source": "import os, numba\nfrom crfmap.repro.report import save_numbers\n"
+                   "save_numbers('threads', {'numba': numba.config.NUMBA_NUM_THREADS, "
+                   "'omp': os.environ.get('OMP_NUM_THREADS')})"}],
+        "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
+        "nbformat": 4, "nbformat_minor": 5}
+    (checkout_copy / "notebooks" / "99_threads.ipynb").write_text(json.dumps(probe))
+    work = tmp_path / "out"
+    snakemake("notebook_99_threads", cwd=work, env={"CRFMAP_ROOT": str(checkout_copy)})
+    saved = json.loads((work / "paper" / "generated" / "threads.json").read_text())
+    assert (saved["numba"], saved["omp"]) == (1, "1")

@@ -1,12 +1,17 @@
 """Run one notebook with papermill into an output root: what each rule of the workflow does.
 
-``python -m crfmap.repro.run NOTEBOOK --output-root DIR [--parameters JSON] --executed OUT.ipynb
---log LOG.ipynb`` executes ``NOTEBOOK`` (kernel ``python3``, cwd = the notebooks folder) with its
+``python -m crfmap.repro.run NOTEBOOK --output-root DIR [--parameters JSON] [--threads N] --executed
+OUT.ipynb --log LOG.ipynb`` executes ``NOTEBOOK`` (kernel ``python3``, cwd = the notebooks folder) with its
 figures and tables going to ``DIR/figures`` and ``DIR/paper/generated`` (``CRFMAP_OUTPUT_ROOT``)
 and its run recorded in each of them (``CRFMAP_RUN``, :mod:`crfmap.repro.provenance`). The executed
 notebook is written to ``LOG`` as it runs and copied to ``OUT`` only on success; on failure one
 stderr line names the notebook, the error and ``LOG`` (the workflow then deletes the rule's outputs,
 so nothing stale is left).
+
+``--threads N`` caps the kernel's numba, OpenMP and BLAS threads at N (the cores the workflow gave the
+rule). The workflow runs notebooks side by side with one each: their LBP runs on grids of a few
+thousand cells, where a parallel region's thread wake-up (on a machine whose other core is busy
+with the other notebook, one scheduler time slice) costs far more than the work it shares.
 """
 from __future__ import annotations
 
@@ -18,8 +23,14 @@ import sys
 from pathlib import Path
 
 
-def run_notebook(notebook, output_root, parameters=None, executed=None, log=None, timeout=3600) -> Path:
+THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def run_notebook(notebook, output_root, parameters=None, executed=None, log=None, timeout=3600,
+                 threads=None) -> Path:
     """Execute ``notebook`` into ``output_root``; returns the executed notebook's path.
+
+    ``threads``: the most threads the kernel's numba, OpenMP and BLAS may start (None: their defaults).
 
     Raises papermill's execution error (with ``ename``/``evalue``) when a cell fails.
     """
@@ -34,6 +45,10 @@ def run_notebook(notebook, output_root, parameters=None, executed=None, log=None
     os.environ["CRFMAP_OUTPUT_ROOT"] = str(output_root)
     os.environ["CRFMAP_RUN"] = json.dumps({"notebook": notebook.name, "parameters": parameters})
     os.environ.setdefault("MPLBACKEND", "Agg")
+    if threads is not None:
+        if not (isinstance(threads, int) and threads >= 1):
+            raise ValueError(f"threads must be a positive integer, got {threads!r}")
+        os.environ.update({name: str(threads) for name in THREAD_VARIABLES})
     pm.execute_notebook(str(notebook), str(log), parameters=parameters, kernel_name="python3",
                         cwd=str(notebook.parent), progress_bar=False, execution_timeout=timeout)
     executed.parent.mkdir(parents=True, exist_ok=True)
@@ -48,9 +63,11 @@ def main(argv=None) -> int:
     parser.add_argument("--parameters", default="{}", help="JSON object of papermill parameters")
     parser.add_argument("--executed", type=Path, help="the executed notebook, written on success")
     parser.add_argument("--log", type=Path, help="the executed notebook as it runs (kept on failure)")
+    parser.add_argument("--threads", type=int, help="most threads the kernel's numba/OpenMP/BLAS may use")
     args = parser.parse_args(argv)
     try:
-        run_notebook(args.notebook, args.output_root, json.loads(args.parameters), args.executed, args.log)
+        run_notebook(args.notebook, args.output_root, json.loads(args.parameters), args.executed, args.log,
+                     threads=args.threads)
     except Exception as exc:  # papermill re-raises the cell's error: say which notebook, what, and where to look
         what = f"{exc.ename}: {exc.evalue}" if hasattr(exc, "ename") else f"{type(exc).__name__}: {exc}"
         first = what.splitlines()[0] if what.strip() else type(exc).__name__

@@ -1,11 +1,16 @@
-"""Warm numba's on-disk cache once, so no entry point pays for compiling the LBP kernels again.
+"""Warm numba's on-disk cache once, so no entry point (and no notebook) pays for compiling kernels again.
 
-``make test`` and ``make reproduce`` run ``python -m crfmap.repro.warmup`` first: it runs
-``crfmap infer`` on a tiny grid with every schedule, in float64 and float32 and with ``--margin``,
-which compiles (or loads) what those calls need into the cache every entry point of the
-environment shares (``NUMBA_CACHE_DIR``, set for the shell by make, for the command line by the
-venv's ``crfmap_numba_cache.pth`` and for Jupyter by the kernel spec; see the Makefile). With a warm
-cache it takes a second or two.
+``make test`` and ``make reproduce`` run ``python -m crfmap.repro.warmup`` first. It calls the public
+functions that reach every numba kernel the command line and the notebooks use (:data:`TASKS`):
+``crfmap infer`` on a tiny grid with every schedule, in float64 and float32 and with ``--margin``;
+:func:`crfmap.crf.lbp.infer` on a grid large enough for the parallel pass; the grid builder and the
+online mapper on a few synthetic scans; the simulator with every drive and with noise; the benchmarks'
+bandwidth kernel. That compiles
+(or loads) them into the cache every entry point of the environment shares (``NUMBA_CACHE_DIR``, set
+for the shell by make, for the command line by the venv's ``crfmap_numba_cache.pth`` and for Jupyter by
+the kernel spec; see the Makefile). Compiling is single-threaded, so the tasks are shared out over
+``--jobs`` processes (default: the cores, at most 4), longest first; each writes its own kernels'
+cache files. With a warm cache it takes a second or two.
 
 In a Jupyter kernel, :func:`announce_if_cold` (called when a notebook imports
 :mod:`crfmap.repro.report`, i.e. in its first code cell) prints "compiling kernels (first run only)"
@@ -13,9 +18,12 @@ and warms the cache there, so the pause happens where the message is, not on a s
 """
 from __future__ import annotations
 
+import argparse
 import contextlib
 import io
+import json
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -23,6 +31,8 @@ from pathlib import Path
 
 KERNEL_MODULES = ("crf/_lbp_fast.py", "crf/_lbp_kernels.py")  # numba modules with cache=True the LBP calls use
 LIBRARY = Path(__file__).resolve().parents[1]
+# every folder or module holding numba kernels the tasks below compile: a change to one re-warms
+NUMBA_SOURCES = ("crf", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py")
 
 
 def cache_dir() -> Path | None:
@@ -48,38 +58,220 @@ def _stamp() -> Path:
     return (cache_dir() or LIBRARY / "crf" / "__pycache__") / "crfmap-warmed.stamp"
 
 
+def _sources() -> list[Path]:
+    """The modules whose change means the warm-up must run again (their kernels, their callers, this file)."""
+    out = [LIBRARY / "cli.py", LIBRARY / "commands" / "infer.py", Path(__file__).resolve()]
+    for relative in NUMBA_SOURCES:
+        path = LIBRARY / relative
+        out += sorted(path.glob("*.py")) if path.is_dir() else [path]
+    return [p for p in out if p.is_file()]
+
+
 def is_warm() -> bool:
-    """Whether :func:`warm` ran since the last change to the code ``crfmap infer`` runs (then it has nothing to do)."""
-    sources = [*(LIBRARY / "crf").glob("*.py"), LIBRARY / "cli.py", LIBRARY / "commands" / "infer.py"]
+    """Whether :func:`warm` ran since the last change to the code it compiles (then it has nothing to do)."""
     stamp = _stamp()
-    return stamp.is_file() and stamp.stat().st_mtime > max(p.stat().st_mtime for p in sources if p.is_file())
+    return stamp.is_file() and stamp.stat().st_mtime > max(p.stat().st_mtime for p in _sources())
 
 
-def warm(verbose: bool = True) -> float:
-    """Run ``crfmap infer`` on a tiny grid with every schedule and dtype; returns the seconds it took."""
+# --- the tasks: each reaches a group of kernels through public functions ---------------------------
+def _tiny_grids():
+    """Two tiny grids of P(occupied): one without and one with certain cells (P exactly 0 or 1: clamped)."""
+    import numpy as np
+
+    soft = np.random.default_rng(0).uniform(0.0, 1.0, (12, 10))
+    hard = soft.copy()
+    hard[2, 2:6], hard[7, 3:8] = 1.0, 0.0
+    return soft, hard
+
+
+def _cli_infer(*variants) -> None:
+    """``crfmap infer`` on the tiny grids, once per variant (extra command-line arguments)."""
     import numpy as np
 
     from crfmap.cli import main
-    from crfmap.crf.lbp import SCHEDULES
 
-    start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="crfmap-warmup-") as tmp:
-        grid = Path(tmp) / "grid.npy"
-        rng = np.random.default_rng(0)
-        np.save(grid, rng.uniform(0.0, 1.0, (12, 10)))
-        runs = [[s] for s in SCHEDULES] + [[s, "--float32"] for s in SCHEDULES] + [["checkerboard", "--margin", "2"]]
-        for run in runs:
-            argv = ["infer", str(grid), str(Path(tmp) / "out.npy"), "--schedule", *run]
-            with contextlib.redirect_stdout(io.StringIO()):  # one line per call would drown the message
-                status = main(argv)
-            if status != 0:
-                raise RuntimeError(f"warm-up call `crfmap {' '.join(argv)}` failed")
-    seconds = time.perf_counter() - start
+        for k, values in enumerate(_tiny_grids()):
+            grid = Path(tmp) / f"grid{k}.npy"
+            np.save(grid, values)
+            for variant in variants:
+                argv = ["infer", str(grid), str(Path(tmp) / "out.npy"), *variant]
+                with contextlib.redirect_stdout(io.StringIO()):  # one line per call would drown the message
+                    status = main(argv)
+                if status != 0:
+                    raise RuntimeError(f"warm-up call `crfmap {' '.join(argv)}` failed")
+
+
+def _schedule(name):
+    return lambda: _cli_infer(["--schedule", name], ["--schedule", name, "--float32"])
+
+
+def _checkerboard(dtype):
+    """The default schedule in one dtype: the fast kernels (whole grid and ``--margin``) and the reference one."""
+
+    def task():
+        from crfmap.crf.lbp import infer
+
+        if dtype == "float32":
+            _cli_infer(["--schedule", "checkerboard", "--float32"])
+        else:
+            _cli_infer(["--schedule", "checkerboard"], ["--schedule", "checkerboard", "--margin", "2"])
+        from crfmap.errors import InputError
+
+        for grid in _tiny_grids():  # clamped certain cells in the fast kernel; the reference kernel
+            infer(grid, max_iter=3, dtype=dtype)  # (kernel="plain": also what damping or odd tables run)
+            infer(grid, max_iter=3, kernel="plain", dtype=dtype)
+            with contextlib.suppress(InputError):  # a zero entry spreads certainty (may contradict: compiled anyway)
+                infer(grid, [[10.0, 1.0], [0.0, 10.0]], max_iter=3, dtype=dtype)
+
+    return task
+
+
+def _large_grid(dtype):
+    """infer() where it takes the parallel pass (a grid above the serial size, 2 threads), whole and bounded."""
+
+    def task():
+        import numpy as np
+
+        from crfmap.crf.lbp import infer
+
+        # above packed.SPARSE_CELLS (2^18) senders: the per-tile measure that freezes settled tiles runs too
+        p = np.random.default_rng(0).uniform(0.0, 1.0, (540, 540))
+        p[:, :20] = 0.5  # unknown cells, so a region differs from the whole grid
+        first = infer(p, max_iter=3, dtype=dtype, threads=2)
+        infer(p, max_iter=3, dtype=dtype, threads=2, messages=first.messages)
+        infer(p, max_iter=3, dtype=dtype, threads=2, region=p != 0.5)
+
+    return task
+
+
+def _mapping():
+    """The grid builder (both models) and the online mapper (with and without a margin) on synthetic scans."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from crfmap.mapping.builder import build_grid
+    from crfmap.mapping.online import OnlineMapper
+    from crfmap.recording import ScanSet
+
+    rng = np.random.default_rng(0)
+    n, beams = 6, 90
+    ranges = rng.uniform(0.5, 3.0, (n, beams)).astype(np.float32)
+    ranges[:, ::17] = np.inf  # no returns
+    poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
+    scans = ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+    every_other = replace(scans, ranges=scans.ranges[::2], laser_poses=scans.laser_poses[::2], stamps=scans.stamps[::2])
+    for model in ("arctan", "logodds"):
+        build_grid(scans, 0.1, model=model)
+        build_grid(every_other, 0.1, model=model)  # strided views: another compiled signature
+    for margin in (None, 2):
+        mapper = OnlineMapper.for_scans(scans, 0.1, margin=margin)
+        for i in range(n):
+            mapper.integrate(scans.ranges[i], scans.laser_poses[i])
+        mapper.finish(tol=1e-3, max_iter=5)
+
+
+def _simulator():
+    """The simulator with every drive, with and without noise, on the small thesis scenes."""
+    from crfmap.sim.simulator import Laser, simulate
+    from crfmap.world.scenes import enclosed_boxes, occluded_walls
+
+    import numpy as np
+
+    from crfmap.raycast import first_hit, line_cells
+
+    occupied = np.zeros((8, 8), bool)
+    occupied[5, :] = True
+    line_cells(0, 0, 7, 3)
+    first_hit(occupied, (1, 1), (2, 7))
+    laser = Laser.with_fov(360, 90, range_max=3.0)
+    scene = occluded_walls("train", size=20)
+    for drive in ("look", "explore", "waypoints"):
+        simulate(scene, laser, drive, progress=False)
+    simulate(enclosed_boxes("train", size=20), laser, "explore", range_noise=0.05, odometry_noise=(0.002, 0.002),
+             progress=False)
+
+
+def _bandwidth():
+    """The streaming-bandwidth kernel of the benchmarks (the speed notebook's and ``crfmap bench``'s bound)."""
+    from crfmap.bench.common import memory_bandwidth
+
+    memory_bandwidth(1, mbytes=1, repeats=1)
+
+
+# name -> (callable, seconds it took on an empty cache on 2 busy cores; to share the tasks out, longest first).
+# The parallel pass (the large grids) is the costliest kernel: float64 and float32 go to different processes.
+TASKS = {
+    "checkerboard float64": (_checkerboard("float64"), 60.0),
+    "checkerboard float32": (_checkerboard("float32"), 50.0),
+    "flooding": (_schedule("flooding"), 15.0),
+    "sweep": (_schedule("sweep"), 25.0),
+    "thesis": (_schedule("thesis"), 5.0),
+    "large grids float64": (_large_grid("float64"), 70.0),
+    "large grids float32": (_large_grid("float32"), 75.0),
+    "mapping": (_mapping, 8.0),
+    "simulator": (_simulator, 4.0),
+    "bandwidth": (_bandwidth, 4.0),
+}
+
+
+def share(tasks, jobs: int) -> list[list[str]]:
+    """Tasks in ``jobs`` groups of about equal estimated seconds (longest first, each to the lightest group).
+
+    >>> share(["flooding", "sweep", "thesis"], 2)
+    [['sweep'], ['flooding', 'thesis']]
+    """
+    groups = [[] for _ in range(max(1, int(jobs)))]
+    load = [0.0] * len(groups)
+    for name in sorted(tasks, key=lambda t: -TASKS[t][1] if t in TASKS else 0.0):
+        k = load.index(min(load))
+        groups[k].append(name)
+        load[k] += TASKS[name][1] if name in TASKS else 0.0
+    return [g for g in groups if g] or [[]]
+
+
+def run_tasks(names) -> dict:
+    """Run these tasks in this process; returns {name: seconds}."""
+    unknown = [n for n in names if n not in TASKS]
+    if unknown:
+        raise ValueError(f"unknown warm-up task(s) {unknown}; known: {', '.join(TASKS)}")
+    seconds = {}
+    for name in names:
+        t0 = time.perf_counter()
+        TASKS[name][0]()
+        seconds[name] = time.perf_counter() - t0
+    return seconds
+
+
+def default_jobs() -> int:
+    return max(1, min(4, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1))
+
+
+def warm(verbose: bool = True, jobs: int | None = None) -> float:
+    """Compile (or load) every kernel of :data:`TASKS` in ``jobs`` processes; returns the seconds it took."""
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    start = time.perf_counter()
+    groups = share(list(TASKS), jobs)
+    if len(groups) == 1:
+        seconds = run_tasks(groups[0])
+    else:
+        command = [sys.executable, "-m", "crfmap.repro.warmup", "--worker"]
+        workers = [subprocess.Popen(command + group, stdout=subprocess.PIPE, text=True) for group in groups]
+        seconds = {}
+        for group, worker in zip(groups, workers):
+            out, _ = worker.communicate()
+            if worker.returncode != 0:
+                raise RuntimeError(f"warm-up of {', '.join(group)} failed (exit {worker.returncode})")
+            seconds.update(json.loads(out.strip().splitlines()[-1]))
+    total = time.perf_counter() - start
     _stamp().parent.mkdir(parents=True, exist_ok=True)
     _stamp().touch()
     if verbose:
-        print(f"numba kernels ready in {seconds:.1f} s (cache: {cache_dir() or 'beside the sources'})")
-    return seconds
+        parts = ", ".join(f"{name} {s:.1f}" for name, s in sorted(seconds.items(), key=lambda kv: -kv[1]))
+        print(f"numba kernels ready in {total:.1f} s on {len(groups)} process(es) (s per task: {parts}; "
+              f"cache: {cache_dir() or 'beside the sources'})")
+    return total
 
 
 def announce_if_cold() -> None:
@@ -90,10 +282,23 @@ def announce_if_cold() -> None:
     warm(verbose=True)
 
 
-if __name__ == "__main__":
-    if is_warm():
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m crfmap.repro.warmup", description=__doc__.splitlines()[0])
+    parser.add_argument("--jobs", type=int, default=None, help="processes compiling at once (default: the cores, <= 4)")
+    parser.add_argument("--force", action="store_true", help="run even if the cache is warm")
+    parser.add_argument("--worker", nargs="*", metavar="TASK", help=argparse.SUPPRESS)  # one process's share
+    args = parser.parse_args(argv)
+    if args.worker is not None:
+        print(json.dumps(run_tasks(args.worker)))
+        return 0
+    if is_warm() and not args.force:
         print(f"numba cache already warm ({cache_dir() or 'beside the sources'})")
-    else:
-        if is_cold():
-            print("compiling kernels (first run only) ...", flush=True)
-        warm(verbose=True)
+        return 0
+    if is_cold():
+        print("compiling kernels (first run only) ...", flush=True)
+    warm(verbose=True, jobs=args.jobs)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
