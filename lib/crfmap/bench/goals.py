@@ -242,15 +242,22 @@ def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000, runs=2) -> li
     for name, kwargs in starts.items():
         options = dict(tol=tol, max_iter=max_iter, dtype=np.float32, threads=threads, **kwargs)
         infer(obs[:512, :512].copy(), **options)  # warm-up: kernel loading is not convergence time
-        results[name] = min((infer(obs, **options) for _ in range(max(runs, 1))), key=lambda r: r.seconds)
-    plain = results["uniform"]
+        best = None
+        for _ in range(max(runs, 1)):
+            # a result held across calls keeps infer's reusable buffers, so the next call would pay
+            # fresh pages: keep what is reported (and a copy of the beliefs), drop the result
+            r = infer(obs, **options)
+            if best is None or r.seconds < best[0]:
+                best = (r.seconds, r.iterations, r.converged, r.beliefs.probability.copy())
+            del r
+        results[name] = best
+    plain_beliefs = results["uniform"][3]
     out = []
-    for name, r in results.items():
-        out.append(record("converge-start", size, np.float32, threads, r.seconds / max(r.iterations, 1),
-                          start=name, iterations=r.iterations, seconds_to_converge=r.seconds, converged=r.converged,
+    for name, (seconds, iterations, converged, beliefs) in results.items():
+        out.append(record("converge-start", size, np.float32, threads, seconds / max(iterations, 1),
+                          start=name, iterations=iterations, seconds_to_converge=seconds, converged=converged,
                           tol=tol, goal_seconds=CONVERGE_GOAL,
-                          max_belief_difference_vs_uniform=float(np.abs(r.beliefs.probability
-                                                                        - plain.beliefs.probability).max()),
+                          max_belief_difference_vs_uniform=float(np.abs(beliefs - plain_beliefs).max()),
                           note="noisy office floor, [[10, 1], [1, 10]]"))
     if option is None:
         out.append(record("converge-start", size, np.float32, threads, None, start="coarse", iterations=None,

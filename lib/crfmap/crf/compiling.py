@@ -38,17 +38,21 @@ def announce(*dispatchers, stream=None) -> bool:
     return True
 
 
-def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1) -> bool:
-    """:func:`announce` for the kernels one :func:`crfmap.crf.lbp.infer` call on ``cells`` cells runs."""
+def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fused: bool = False) -> bool:
+    """:func:`announce` for the kernels one :func:`crfmap.crf.lbp.infer` call on ``cells`` cells runs.
+
+    ``fused``: the call packs with the first half-sweep (:meth:`crfmap.crf.packed.PackedBlock.start_uniform`)
+    instead of filling and packing the planes apart.
+    """
     from crfmap.crf import _lbp_fast as F
     from crfmap.crf import _lbp_kernels as K
     from crfmap.crf import packed as P
 
-    key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1)
+    key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1, fused)
     if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
         return False  # uncompiled: say it once per process, not on every call
     if fast:  # the kernels every such call runs
-        kernels = (P._fill_ones, P._pack_unary, P._beliefs_packed, F._tile_max)
+        kernels = ((P._pack_start,) if fused else (P._fill_ones, P._pack_unary)) + (P._beliefs_packed, F._tile_max)
         kernels += (F._pass_parallel,) if key[2] else (F._pass_serial,)
     else:
         kernels = {"checkerboard": (K._checkerboard_iteration,), "flooding": (K._flooding_iteration,),

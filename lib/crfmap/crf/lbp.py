@@ -231,7 +231,7 @@ def infer(
 
     previous_threads = numba.get_num_threads()
     n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
-    announce_lbp(use_fast, schedule, g.probability.size, n_threads)
+    announce_lbp(use_fast, schedule, g.probability.size, n_threads, bool(fused))
     numba.set_num_threads(n_threads)
     try:
         t0 = time.perf_counter()

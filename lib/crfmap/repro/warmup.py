@@ -32,7 +32,8 @@ from pathlib import Path
 KERNEL_MODULES = ("crf/_lbp_fast.py", "crf/_lbp_kernels.py")  # numba modules with cache=True the LBP calls use
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
-NUMBA_SOURCES = ("crf", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py")
+NUMBA_SOURCES = ("crf", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
+                 "assess/scansplit.py")
 
 
 def cache_dir() -> Path | None:
@@ -200,6 +201,18 @@ def _bandwidth():
     memory_bandwidth(1, mbytes=1, repeats=1)
 
 
+def _scoring():
+    """Scan-split scores with bootstrap intervals (the compiled AUC over resamples, notebook 10 and ``crfmap evaluate``)."""
+    import numpy as np
+
+    from crfmap.assess.scansplit import ScanSplit, score
+
+    hits = np.array([[0, 3, 0, 1]])
+    split = ScanSplit(first_hits=hits, first_passes=np.array([[2, 0, 1, 0]]),
+                      second_hits=np.array([[0, 2, 1, 0]]), second_passes=np.array([[3, 0, 0, 2]]))
+    score(split, {"raw": split.raw_probability()}, n_boot=2, block=1)
+
+
 # name -> (callable, seconds it took on an empty cache on 2 busy cores; to share the tasks out, longest first).
 # The parallel pass (the large grids) is the costliest kernel: float64 and float32 go to different processes.
 TASKS = {
@@ -213,6 +226,7 @@ TASKS = {
     "mapping": (_mapping, 8.0),
     "simulator": (_simulator, 4.0),
     "bandwidth": (_bandwidth, 4.0),
+    "scoring": (_scoring, 3.0),
 }
 
 
