@@ -36,8 +36,12 @@ warm: $(STAMP)
 test: warm
 	$(BIN)/python -m pytest -q
 
-reproduce: warm
-	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES)
+# the clock starts before the venv and the warm-up, so the record is what `make reproduce` costs
+reproduce:
+	@echo $$(date +%s) > .reproduce-started
+	$(MAKE) --no-print-directory warm
+	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --started-at "$$(cat .reproduce-started)"
+	@rm -f .reproduce-started
 
 # make sweep SWEEP=04_noise   (workflow/sweeps/04_noise.yaml -> out/runs/04_noise/)
 sweep: warm

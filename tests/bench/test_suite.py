@@ -107,12 +107,34 @@ def test_quick_bench_has_a_row_for_each_user_facing_goal(quick_records):
 def test_reproduce_row_reads_the_last_runs_record(tmp_path):
     from crfmap.bench.goals import reproduce_record
 
-    path = tmp_path / "reproduce_timings.json"
-    assert reproduce_record(path)["seconds"] is None
+    path, wall = tmp_path / "reproduce_timings.json", tmp_path / "reproduce_wall.json"
+    assert reproduce_record(path, wall)["seconds"] is None
     path.write_text(json.dumps({"seconds": {"01_a.ipynb": 12.0, "09_speed.ipynb": 150.0}, "total_seconds": 170.5,
                                 "quick": False}))
-    rec = reproduce_record(path)
+    rec = reproduce_record(path, wall)  # no wall-clock record: the summed notebook times, said so
     assert rec["seconds"] == 170.5 and rec["slowest"] == "09_speed.ipynb" and rec["record_quick"] is False
+    assert "summed" in rec["note"]
+
+
+def test_reproduce_row_prefers_the_same_runs_wall_clock(tmp_path):
+    import os
+
+    from crfmap.bench.goals import reproduce_record
+    from crfmap.repro.reproduce import write_wall_record
+
+    path, wall = tmp_path / "reproduce_timings.json", tmp_path / "reproduce_wall.json"
+    path.write_text(json.dumps({"seconds": {"01_a.ipynb": 12.0}, "total_seconds": 12.0}))
+    write_wall_record(80.0, started_at=None, path=wall)
+    os.utime(path, (1e9, 1e9))  # the timings are older than the wall record: the same run
+    rec = reproduce_record(path, wall)
+    assert rec["seconds"] == 80.0 and rec["workflow_seconds"] == 80.0 and "workflow" in rec["note"]
+    import time
+
+    write_wall_record(80.0, started_at=time.time() - 200.0, path=wall)
+    rec = reproduce_record(path, wall)
+    assert 199.0 <= rec["seconds"] <= 210.0 and rec["notebook_seconds_total"] == 12.0 and "venv" in rec["note"]
+    os.utime(wall, (1e9 - 10, 1e9 - 10))  # a wall record older than the timings belongs to another run
+    assert reproduce_record(path, wall)["seconds"] == 12.0
 
 
 def test_coarse_start_option_is_one_that_changes_the_start():

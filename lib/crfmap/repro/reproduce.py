@@ -66,6 +66,8 @@ def main(argv=None) -> int:
     parser.add_argument("--cores", type=int, default=2)
     parser.add_argument("--dry-run", "-n", action="store_true", help="only say what would run, and why")
     parser.add_argument("--profile", type=Path, help="a workflow profile folder, e.g. workflow/profiles/slurm")
+    parser.add_argument("--started-at", type=float, help="Unix time `make reproduce` started (before the venv "
+                        "and the warm-up): recorded with the workflow's own time after a full run")
     parser.add_argument("extra", nargs=argparse.REMAINDER, help="-- then arguments for snakemake")
     args = parser.parse_args(argv)
 
@@ -90,9 +92,34 @@ def main(argv=None) -> int:
     command = snakemake_command(targets, args.cores, directory, args.quick, args.dry_run, args.profile, extra)
     start = time.perf_counter()
     code = subprocess.call(command, env={**os.environ, "MPLBACKEND": os.environ.get("MPLBACKEND", "Agg")})
+    seconds = time.perf_counter() - start
     print(f"reproduce: {'dry run' if args.dry_run else 'workflow'} {'finished' if code == 0 else 'failed'} "
-          f"in {time.perf_counter() - start:.1f} s (outputs under {directory})", file=sys.stderr)
+          f"in {seconds:.1f} s (outputs under {directory})", file=sys.stderr)
+    if code == 0 and targets == ["all"] and not (args.dry_run or args.quick or extra or args.profile):
+        write_wall_record(seconds, args.started_at, args.cores)
     return code
+
+
+def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None) -> Path:
+    """Record a full run's wall-clock time (``out/logs/reproduce_wall.json``), read by ``crfmap bench``.
+
+    ``started_at`` (Unix time) is when ``make reproduce`` began, before the venv and the warm-up;
+    without it only the workflow's own time is known. A run that found nothing to do records that
+    too (its time is not a reproduction's): ``workflow_seconds`` is what this run took.
+    """
+    import json
+
+    from crfmap.io.atomic import atomic_path
+
+    path = Path(path or paths.OUT / "logs" / "reproduce_wall.json")
+    now = time.time()
+    record = {"workflow_seconds": round(float(workflow_seconds), 1), "cores": int(cores),
+              "finished": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(now)),
+              "make_seconds": None if started_at is None else round(now - float(started_at), 1)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(json.dumps(record, indent=1) + "\n")
+    return path
 
 
 if __name__ == "__main__":
