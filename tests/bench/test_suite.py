@@ -82,7 +82,7 @@ def test_quick_bench_has_a_row_for_each_user_facing_goal(quick_records):
     rows = {}
     for r in quick_records:
         rows.setdefault(r["method"], []).append(r)
-    assert {"infer-vs-kernel", "start-cold", "start-warm", "start-env", "explorer-redraw", "explorer-scene-change",
+    assert {"infer-vs-kernel", "kernel-vs-bound", "start-cold", "start-warm", "start-env", "explorer-redraw", "explorer-scene-change",
             "reproduce", "converge-start"} <= set(rows)
     # end to end against the same run's kernel, same size / dtype / threads
     (ratio,) = rows["infer-vs-kernel"]
@@ -90,6 +90,15 @@ def test_quick_bench_has_a_row_for_each_user_facing_goal(quick_records):
     (end_to_end,) = rows["crfmap-infer"]
     assert ratio["kernel_mcells_per_second"] == kernel["mcells_per_second"]
     assert ratio["ratio"] == pytest.approx(end_to_end["mcells_per_second"] / kernel["mcells_per_second"])
+    # each float32 kernel row against the bandwidth row with the same threads, from the same run
+    bounds = {r["threads"]: r["bound_mcells_per_second"]["float32"] for r in rows["memory-bandwidth"]}
+    against = rows["kernel-vs-bound"]
+    assert {r["threads"] for r in against} == set(bounds)
+    for r in against:
+        (k,) = [f for f in rows["crfmap-fast"] if f["dtype"] == "float32" and f["threads"] == r["threads"]]
+        assert r["kernel_mcells_per_second"] == k["mcells_per_second"]
+        assert r["ratio_to_bound"] == pytest.approx(k["mcells_per_second"] / bounds[r["threads"]])
+        assert r["goal_ratio"] == (2.0 if r["size"] == 2048 and r["threads"] > 1 else None)
     # quick: the empty-cache start is skipped, saying so; the warm ones are timed
     (cold,) = rows["start-cold"]
     assert cold["seconds"] is None and "quick" in cold["note"]

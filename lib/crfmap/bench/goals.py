@@ -44,6 +44,10 @@ START_GOAL = 2.0  # [s] first `crfmap infer` minus a warm one
 REDRAW_GOAL = 0.3  # [s] explorer, widget change to new image
 REPRODUCE_GOAL = 300.0  # [s] make reproduce from a fresh clone
 CONVERGE_GOAL = 1.0  # [s] 4096² to max message change < 1e-4
+BOUND_GOAL = 2.0  # kernel per-iteration throughput / one-pass bandwidth bound (2048², all threads)
+BOUND_GOAL_SIZE = 2048
+ONE_THREAD_GOAL = 1000.0  # [Mcell/s] kernel, float32, one thread, on a cache-resident grid
+ONE_THREAD_GOAL_SIZE = 512
 CONVERGE_GOAL_SIZE = 4096
 QUICK_CONVERGE_GOAL_SIZE = 256
 START_MAP_SIZE = 512  # [cells] per side of the map `crfmap infer` reads in the start rows
@@ -68,6 +72,28 @@ def infer_vs_kernel(kernel: dict, end_to_end: dict) -> dict:
                   iterations_per_call=end_to_end.get("iterations_timed"),
                   note=f"infer() end to end over its kernel per iteration, {end_to_end.get('iterations_timed')} "
                   "iterations per call (packing and unpacking spread over them)")
+
+
+def kernel_vs_bound(kernel: dict, bound_mcells_per_second) -> dict:
+    """A float32 ``crfmap-fast`` record against the one-pass bandwidth bound measured in the same run.
+
+    Goals (issue 13): >= :data:`BOUND_GOAL` x the bound at :data:`BOUND_GOAL_SIZE`² with every
+    thread; >= :data:`ONE_THREAD_GOAL` Mcell/s on one thread at :data:`ONE_THREAD_GOAL_SIZE`².
+
+    >>> r = kernel_vs_bound({"size": 2048, "dtype": "float32", "threads": 2, "mcells_per_second": 1900.0}, 1000.0)
+    >>> r["ratio_to_bound"], r["goal_ratio"]
+    (1.9, 2.0)
+    """
+    mcells = kernel["mcells_per_second"]
+    ratio = None if not bound_mcells_per_second else mcells / bound_mcells_per_second
+    return record("kernel-vs-bound", kernel["size"], kernel["dtype"], kernel["threads"], None,
+                  kernel_mcells_per_second=mcells, bound_mcells_per_second=bound_mcells_per_second,
+                  ratio_to_bound=ratio, goal_ratio=(BOUND_GOAL if kernel["size"] == BOUND_GOAL_SIZE and kernel["threads"] > 1
+                              else None),
+                  goal_mcells_per_second=(ONE_THREAD_GOAL if kernel["size"] == ONE_THREAD_GOAL_SIZE
+                                          and kernel["threads"] == 1 else None),
+                  note="kernel per iteration over the one-pass bound of the memory-bandwidth row with the same "
+                  "threads (same run)")
 
 
 # --- cold and warm start ------------------------------------------------------------------------------

@@ -262,12 +262,14 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         tasks += [("start", None), ("explorer", None), ("reproduce", None),
                   ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)]
     bar = tqdm(tasks, desc="bench", disable=not progress)
+    bounds = {}  # threads -> float32 one-pass bound [Mcell/s] of this run's bandwidth rows
     for kind, size in bar:
         bar.set_postfix_str(f"{kind} {size or ''}".strip())
         if kind == "machine":
             yield agreement()
             for th in threads:
                 bw = memory_bandwidth(th, bandwidth_mbytes or (64 if quick else 256))
+                bounds[th] = bw * 1e3 / BYTES_PER_CELL_PASS["float32"]
                 yield record("memory-bandwidth", None, None, th, None, gbytes_per_second=bw,
                              mbytes_per_array=bandwidth_mbytes or (64 if quick else 256),
                              bound_mcells_per_second={k: bw * 1e3 / v for k, v in BYTES_PER_CELL_PASS.items()},
@@ -292,6 +294,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             yield end_to_end
             if goals:
                 yield G.infer_vs_kernel(fast[top], end_to_end)
+                for th in threads:
+                    yield G.kernel_vs_bound(fast[th], bounds.get(th))
             if size <= 512:
                 yield bench_plain(size, 1, top)
         elif kind == "converge":
