@@ -69,7 +69,8 @@ def infer_fast(prob, tables, link, floor, max_iter, tol, active, messages, dtype
         if bad:
             check_probability_array(prob, "grid")  # raises, naming what is wrong
             raise AssertionError("the packing's grid check and check_probability_array disagree")
-        if certain:  # hard evidence: the general path
+        if certain:  # hard evidence: the general path, which may then reuse these buffers
+            packed = arrays = None
             states = certain_states(prob, link, tables)
             return infer_fast(prob, tables, link, floor, max_iter, tol, None, None, dtype, threads, block, freeze,
                               states)

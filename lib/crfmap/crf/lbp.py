@@ -236,8 +236,9 @@ def infer(
     try:
         t0 = time.perf_counter()
         if use_fast:
-            out = infer_fast(np.ascontiguousarray(g.probability, dtype=np.float64), tables, link, MESSAGE_FLOOR, max_iter, tol, active, messages, dtype,
-                             n_threads, block, freeze, sending, fused)
+            prob = np.ascontiguousarray(g.probability, dtype=np.float64)
+            out = infer_fast(prob, tables, link, MESSAGE_FLOOR, max_iter, tol, active, messages, dtype, n_threads,
+                             block, freeze, sending, fused)
             states = out[4] if fused else states  # fused: the certain cells the packing found
         else:
             out = _infer_plain(g, hidden, link, schedule, max_iter, tol, damping, senders, messages, pairing,
