@@ -109,15 +109,19 @@ def test_static_dependencies_cover_what_a_notebook_really_imports():
         assert loaded - static == set(), f"{nb.name}: imports not seen by library_sources"
 
 
-def test_a_failed_notebook_leaves_no_stale_outputs_and_names_its_log(checkout_copy, tmp_path):
-    failing = {"cells": [
+def _one_cell_notebook(source: str) -> dict:
+    """A notebook with a ``parameters`` cell (quick = False) and one code cell."""
+    return {"cells": [
         {"cell_type": "code", "metadata": {"tags": ["parameters"]}, "source": "quick = False", "outputs": [],
          "execution_count": None},
-        {"cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None,
-         "source": "from crfmap.repro.report import save_numbers\nsave_numbers('half_done', {'x': 1})\n"
-                   "raise ValueError('broken on purpose')"}],
+        {"cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None, "source": source}],
         "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
         "nbformat": 4, "nbformat_minor": 5}
+
+
+def test_a_failed_notebook_leaves_no_stale_outputs_and_names_its_log(checkout_copy, tmp_path):
+    failing = _one_cell_notebook("from crfmap.repro.report import save_numbers\nsave_numbers('half_done', {'x': 1})\n"
+                                 "raise ValueError('broken on purpose')")
     (checkout_copy / "notebooks" / "99_fails.ipynb").write_text(json.dumps(failing))
     work = tmp_path / "out"
     done = snakemake("notebook_99_fails", cwd=work, env={"CRFMAP_ROOT": str(checkout_copy)}, check=False)
@@ -202,15 +206,9 @@ def test_notebooks_run_longest_first_and_a_benchmark_alone(tmp_path, fake_data):
 
 
 def test_a_notebook_runs_with_the_threads_its_rule_got(checkout_copy, tmp_path):
-    probe = {"cells": [
-        {"cell_type": "code", "metadata": {"tags": ["parameters"]}, "source": "quick = False", "outputs": [],
-         "execution_count": None},
-        {"cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None,
-         "source": "import os, numba\nfrom crfmap.repro.report import save_numbers\n"
-                   "save_numbers('threads', {'numba': numba.config.NUMBA_NUM_THREADS, "
-                   "'omp': os.environ.get('OMP_NUM_THREADS')})"}],
-        "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
-        "nbformat": 4, "nbformat_minor": 5}
+    probe = _one_cell_notebook("import os, numba\nfrom crfmap.repro.report import save_numbers\n"
+                               "save_numbers('threads', {'numba': numba.config.NUMBA_NUM_THREADS, "
+                               "'omp': os.environ.get('OMP_NUM_THREADS')})")
     (checkout_copy / "notebooks" / "99_threads.ipynb").write_text(json.dumps(probe))
     work = tmp_path / "out"
     snakemake("notebook_99_threads", cwd=work, env={"CRFMAP_ROOT": str(checkout_copy)})
