@@ -34,6 +34,7 @@ warm: $(STAMP)
 	$(BIN)/python -m crfmap.repro.warmup --jobs $(CORES)
 
 test: warm
+	$(BIN)/ruff check lib tests notebooks
 	$(BIN)/python -m pytest -q
 
 # the clock starts before the venv and the warm-up, so the record is what `make reproduce` costs

@@ -8,4 +8,5 @@ from crfmap import _numba_cache  # noqa: F401  (first: a read-only install cache
 from crfmap.errors import CrfmapError, InputError, DataMissingError
 from crfmap.grid import OccupancyGrid, UNKNOWN
 
+__all__ = ["CrfmapError", "InputError", "DataMissingError", "OccupancyGrid", "UNKNOWN"]
 __version__ = "0.1.0"

@@ -151,8 +151,8 @@ def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles
         run_pass = block.run_pass
 
         def logged(n, threads, measure=True, active=None, per_tile=True):
-            out = run_pass(n, threads, measure=measure, active=active, per_tile=per_tile)
-            passes.append((active is None, out[0]))
+            out = run_pass(n, threads, measure=measure, active=active, per_tile=per_tile)  # noqa: B023
+            passes.append((active is None, out[0]))  # noqa: B023 (this iteration's lists)
             return out
 
         block.run_pass = logged

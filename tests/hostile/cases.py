@@ -11,14 +11,12 @@ cases need a real process (signals, resource limits).
 from __future__ import annotations
 
 import os
-import signal
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from fixtures import (GOOD_YAML, alias_bomb, carmen_log, carmen_text, deep_yaml, fifo, good_bag, good_grid, good_map,
-                      good_npy, gzip_bomb, map_yaml, npy_with_header, png_header_only, tf_bag)
+from fixtures import (GOOD_YAML, alias_bomb, carmen_log, carmen_text, deep_yaml, fifo, good_bag, good_npy, gzip_bomb, map_yaml, npy_with_header, png_header_only, tf_bag)
 
 
 @dataclass

@@ -1,7 +1,6 @@
 """The catalogue, continued: options, output paths, signals, faults and library calls."""
 from __future__ import annotations
 
-import os
 import signal
 from pathlib import Path
 

@@ -95,7 +95,6 @@ def good_bag(d, name="bag", fmt="ros2"):
 
 def tf_bag(d, quaternion, name="tfbag", fmt="ros2"):
     """A bag whose /tf odom -> base_link uses ``quaternion`` (x, y, z, w) and a scan in base_link."""
-    from rosbags.typesys import Stores, get_typestore
 
     from crfmap.io.bag_reader import typestore
 

@@ -2,7 +2,8 @@
 
 Clean means: exit status 2 (library: InputError), exactly one stderr line naming the input,
 no traceback, the folder exactly as before (no output, previous output intact, no
-temporary file), within the time limit; children also under an address-space limit.
+temporary file), within a CPU-time limit (never the wall clock: a busy machine must not fail a case;
+slow cases are listed in the summary); children also under an address-space limit.
 Most cases run in this process (fast); signals and resource limits need a child.
 """
 import pytest

@@ -167,7 +167,7 @@ def bench_maxflow(size, repeats, seed=0, kinds=("uniform", "office")) -> list:
     out = []
     for kind in kinds:
         observed = bench_grid(size, seed, kind=kind)
-        seconds = median_time(lambda: graph_cut_map(observed), repeats)
+        seconds = median_time(lambda: graph_cut_map(observed), repeats)  # noqa: B023 (called at once)
         labels, _ = graph_cut_map(observed)
         lbp = infer(observed, tol=FIXED_POINT_TOL, max_iter=FIXED_POINT_MAX_ITER)
         lbp_labels = lbp.beliefs.probability > 0.5

@@ -13,7 +13,6 @@ import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.frames import quaternion_to_yaw, yaw_to_quaternion
-from crfmap.grid import OccupancyGrid
 
 T_SCAN = "sensor_msgs/msg/LaserScan"
 T_ODOM = "nav_msgs/msg/Odometry"

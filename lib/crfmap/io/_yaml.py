@@ -10,7 +10,6 @@ interfaces are :mod:`crfmap.io.map_server` and :mod:`crfmap.io.npy_grid`.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import yaml
 

@@ -35,13 +35,12 @@ importable from here too.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 from crfmap.errors import InputError
-from crfmap.frames import TWO_PI, compose
+from crfmap.frames import compose
 from crfmap.frames import wrap_angle  # noqa: F401  (re-exported)
 from crfmap.grid import OccupancyGrid
 from crfmap.checks import check_number
