@@ -116,7 +116,7 @@ def test_a_bare_data_file_reads_without_metadata(tmp_path, storage, suffix):
 def test_default_metadata_is_what_humble_parses(tmp_path, storage):
     write_bag(make_recording(), tmp_path / "run", storage=storage)
     meta = humble_read_metadata((tmp_path / "run" / "metadata.yaml").read_text())
-    assert meta["version"] == 8 and meta["storage_identifier"] == storage
+    assert meta["version"] == 5 and meta["storage_identifier"] == storage  # what Humble writes
     for name in meta["relative_file_paths"]:  # Humble resolves them against the bag folder
         assert (tmp_path / "run" / name).is_file()
     topics = meta["topics"]
@@ -168,3 +168,104 @@ def test_ros1_bag_latches_tf_static_and_map(tmp_path):
     assert latching["/tf_static"] == latching["/map"] == 1
     assert not latching["/scan"]
     assert len(read_bag(tmp_path / "b.bag").scans) == 5
+
+
+# --- each distro's storage plugins, their own SQL and MCAP records ---------------------------------
+# The queries rosbag2's sqlite3 plugin runs on a bag it reads, copied from its source
+# (ros2/rosbag2, humble: rosbag2_storage_default_plugins/src/.../sqlite/sqlite_storage.cpp and
+# sqlite_wrapper.cpp; jazzy: rosbag2_storage_sqlite3/src/rosbag2_storage_sqlite3/...).
+SQLITE_READ_QUERIES = {
+    "humble": [
+        "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='schema';",
+        "SELECT schema_version from schema;",
+        "SELECT ros_distro from schema;",
+        "SELECT INSTR(sql, 'offered_qos_profiles') FROM sqlite_master WHERE type='table' AND name='topics';",
+        "SELECT name, type, serialization_format, offered_qos_profiles FROM topics ORDER BY id;",
+        "SELECT name, type, serialization_format, COUNT(messages.id), MIN(messages.timestamp), "
+        "MAX(messages.timestamp), offered_qos_profiles FROM messages JOIN topics on topics.id = messages.topic_id "
+        "GROUP BY topics.name;",
+        "SELECT data, timestamp, topics.name, messages.id FROM messages JOIN topics ON messages.topic_id = "
+        "topics.id WHERE (((timestamp = 0) AND (messages.id >= 0)) OR (timestamp > 0)) "
+        "ORDER BY messages.timestamp, messages.id;",
+    ],
+    "jazzy": [
+        "SELECT schema_version from schema;",
+        "SELECT ros_distro from schema;",
+        "SELECT id, name, type, serialization_format, offered_qos_profiles, type_description_hash FROM topics "
+        "ORDER BY id;",
+        "SELECT topic_type, encoding, encoded_message_definition, type_description_hash FROM "
+        "message_definitions ORDER BY id;",
+        "SELECT metadata_version, metadata FROM metadata ORDER BY id;",
+        "SELECT messages.topic_id, name, type, serialization_format, COUNT(messages.id), "
+        "MIN(messages.timestamp), MAX(messages.timestamp), offered_qos_profiles, type_description_hash "
+        "FROM messages JOIN topics on topics.id = messages.topic_id GROUP BY topics.name;",
+        "SELECT max(rowid) from messages;",
+    ],
+}
+SQLITE_COLUMNS = {  # table -> columns of each distro's SqliteStorage::initialize()
+    "humble": {"schema": ["schema_version", "ros_distro"], "metadata": ["id", "metadata_version", "metadata"],
+               "topics": ["id", "name", "type", "serialization_format", "offered_qos_profiles"],
+               "messages": ["id", "topic_id", "timestamp", "data"]},
+    "jazzy": {"schema": ["schema_version", "ros_distro"], "metadata": ["id", "metadata_version", "metadata"],
+              "topics": ["id", "name", "type", "serialization_format", "offered_qos_profiles",
+                         "type_description_hash"],
+              "message_definitions": ["id", "topic_type", "encoding", "encoded_message_definition",
+                                      "type_description_hash"],
+              "messages": ["id", "topic_id", "timestamp", "data"]},
+}
+
+
+@pytest.mark.parametrize("distro, schema", [("humble", 3), ("jazzy", 4)])
+def test_sqlite3_layout_is_the_distros(tmp_path, distro, schema):
+    rec = make_recording()
+    write_bag(rec, tmp_path / "run", storage="sqlite3", distro=distro)
+    with sqlite3.connect(tmp_path / "run" / "run_0.db3") as db:
+        tables = {name for (name,) in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        assert tables == set(SQLITE_COLUMNS[distro])
+        for table, columns in SQLITE_COLUMNS[distro].items():
+            assert [row[1] for row in db.execute(f"PRAGMA table_info({table})")] == columns, table
+        indexes = {name for (name,) in db.execute("SELECT name FROM sqlite_master WHERE type='index'")}
+        assert "timestamp_idx" in indexes
+        results = [db.execute(q).fetchall() for q in SQLITE_READ_QUERIES[distro]]
+        assert db.execute("SELECT schema_version, ros_distro FROM schema").fetchall() == [(schema, distro)]
+        n_messages = db.execute("SELECT COUNT(*) FROM messages").fetchone()[0]
+        if distro == "humble":
+            assert results[3][0][0] > 0  # field_exists("topics", "offered_qos_profiles")
+            assert sum(r[3] for r in results[5]) == n_messages and len(results[6]) == n_messages
+            assert db.execute("SELECT COUNT(*) FROM metadata").fetchone()[0] == 0  # Humble's plugin fills none
+        else:
+            topics, definitions, metadata = results[2], results[3], results[4]
+            assert all(t[5].startswith("RIHS01_") for t in topics)
+            assert {d[0] for d in definitions} == {t[2] for t in topics} and all(d[1] == "ros2msg" for d in definitions)
+            (version, text), = metadata
+            assert version == 9 and yaml.safe_load(text)["ros_distro"] == "jazzy"
+            assert sum(r[4] for r in results[5]) == n_messages
+    meta = yaml.safe_load((tmp_path / "run" / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert meta["starting_time"]["nanoseconds_since_epoch"] == int(round(min(rec.odometry.stamps) * 1e9)) > 0
+    assert meta.get("ros_distro", distro) == distro and "rosbags" not in str(meta)
+    assert len(read_bag(tmp_path / "run").scans) == len(rec.scans)
+
+
+@pytest.mark.parametrize("distro", ["humble", "jazzy"])
+def test_mcap_records_are_the_distros(tmp_path, distro):
+    from mcap.reader import make_reader  # the reference MCAP reader, independent of rosbags
+
+    write_bag(make_recording(), tmp_path / "run", distro=distro)
+    with open(tmp_path / "run" / "run_0.mcap", "rb") as f:
+        reader = make_reader(f)
+        header = reader.get_header()
+        summary = reader.get_summary()
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        messages = list(reader.iter_messages())
+    assert header.profile == "ros2"
+    assert {s.encoding for s in summary.schemas.values()} == {"ros2msg"}
+    for channel in summary.channels.values():
+        assert channel.message_encoding == "cdr"
+        keys = {"offered_qos_profiles"} | ({"topic_type_hash"} if distro == "jazzy" else set())
+        assert set(channel.metadata) == keys, channel.topic
+    if distro == "humble":  # MCAPStorage::ensure_rosdistro_metadata_added
+        assert metadata == {"rosbag2": {"ROS_DISTRO": "humble"}}
+    else:  # MCAPStorage::update_metadata
+        assert yaml.safe_load(metadata["rosbag2"]["serialized_metadata"])["ros_distro"] == "jazzy"
+    assert messages and all(m.log_time == m.publish_time > 0 for _, _, m in messages)
+    assert summary.statistics.message_count == len(messages)

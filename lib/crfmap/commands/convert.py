@@ -3,7 +3,11 @@ from __future__ import annotations
 
 import argparse
 import time
+import warnings
+from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.commands.build import add_bag_options, add_ros2_bag_options, ros2_bag_kwargs
@@ -14,7 +18,10 @@ def add_parser(sub):
         "convert",
         help="convert a CARMEN log (or a bag) to a ROS2 or ROS1 bag",
         description="Write /scan, /odom, /tf, /tf_static and /ground_truth_pose (corrected poses) "
-        "of a CARMEN log as a ROS bag. A bag as input is re-written in the other format.",
+        "of a CARMEN log as a ROS bag. A bag as input is re-written in the other format. No message gets "
+        "time 0 (ROS reads it as 'no time'): a CARMEN log's ODOM records stamped 0 or out of time order "
+        "are dropped (with a warning saying how many); a bag whose stamps start at 0 (an older crfmap "
+        "simulation) has every stamp shifted by 1700000000 s, the simulator's start time.",
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("output", help="ROS2 bag folder, or ROS1 file ending in .bag")
@@ -23,6 +30,35 @@ def add_parser(sub):
     add_bag_options(p)
     add_ros2_bag_options(p)
     return p
+
+
+def recording_stamps(rec):
+    """Every stamp [s] of a recording: scans, odometry, true poses, cmd_vel."""
+    tracks = [rec.scans] + [t for t in (rec.odometry, rec.true_poses, rec.cmd_vel) if t is not None]
+    return np.concatenate([np.asarray(t.stamps, np.float64) for t in tracks])
+
+
+def shift_zero_start(rec, source):
+    """``rec``, its stamps shifted by the simulator's start time if any rounds to 0 ns, with a warning.
+
+    A bag whose clock starts at 0 is a simulation (crfmap's before it started at
+    :data:`~crfmap.sim.simulator.START_TIME`); shifted, it is what a rerun of that simulation writes
+    now. A CARMEN log's zero stamps are corrupt records, which :func:`~crfmap.io.carmen.read_carmen`
+    drops; a log whose FLASER lines themselves are stamped 0 is shifted like a bag.
+    """
+    from crfmap.sim.simulator import START_TIME
+
+    if np.min(recording_stamps(rec)) >= 0.5e-9:
+        return rec
+    warnings.warn(f"{source}: stamps start at 0 s, which ROS reads as 'no time'; every stamp shifted by "
+                  f"{START_TIME:.0f} s", stacklevel=2)
+    moved = {}
+    for name in ("odometry", "true_poses", "cmd_vel"):
+        track = getattr(rec, name)
+        if track is not None:
+            moved[name] = replace(track, stamps=np.asarray(track.stamps, np.float64) + START_TIME)
+    return replace(rec, scans=replace(rec.scans, stamps=np.asarray(rec.scans.stamps, np.float64) + START_TIME),
+                   **moved)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
                          laser_mount=args.laser_mount, max_range=args.max_range)
+    rec = shift_zero_start(rec, args.input)
     write_bag(rec, out, fmt=fmt, **ros2_bag_kwargs(args, fmt))
     n_odom = len(rec.odometry) if rec.odometry is not None else 0
     print(f"{args.input}: {len(rec.scans)} scans, {n_odom} odometry poses -> {fmt} bag {out} "

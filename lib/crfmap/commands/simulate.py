@@ -53,6 +53,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="explore mode only: look around only every N cells (default 1: at every cell)")
     p.add_argument("--resolution", type=float, default=None, metavar="M",
                    help="cell size of the scene [m] (default 0.1; office 0.05)")
+    p.add_argument("--start-time", type=float, default=None, metavar="S",
+                   help="stamp of the first pose [s since the epoch] (default 1700000000 = 2023-11-14 "
+                   "22:13:20 UTC: wall-clock-like, fixed so that reruns are identical; must be > 0, as ROS "
+                   "reads a stamp of 0 as 'no time')")
     p.add_argument("--legacy-no-return", action="store_true",
                    help="report beams that hit nothing as -1 (the thesis) instead of +inf (REP 117)")
     from crfmap.commands.build import add_ros2_bag_options
@@ -86,6 +90,8 @@ def check_options(args):
         check_int("--scene-seed", args.scene_seed, low=0)
     if args.resolution is not None:
         check_number("--resolution", args.resolution, low=0.001, high=10.0)
+    if getattr(args, "start_time", None) is not None:
+        check_number("--start-time", args.start_time, low=0.0, low_open=True, high=4e9)  # ROS 1 time: uint32 s
 
 
 def build_recording(args):
@@ -93,7 +99,7 @@ def build_recording(args):
     check_options(args)
     from crfmap.world.scenes import make_scene
     from crfmap.sim.drives import Explore
-    from crfmap.sim.simulator import LEGACY_NO_RETURN, Laser, simulate
+    from crfmap.sim.simulator import LEGACY_NO_RETURN, START_TIME, Laser, simulate
 
     scene_kwargs = {}
     if args.scene_seed is not None:
@@ -122,6 +128,7 @@ def build_recording(args):
         range_noise=args.range_noise,
         range_sigma=args.range_sigma,
         odometry_noise=(args.odom_noise, args.odom_yaw_noise),
+        t0=START_TIME if getattr(args, "start_time", None) is None else args.start_time,
         progress=not args.quiet,
     )
 

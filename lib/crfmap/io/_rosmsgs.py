@@ -41,8 +41,11 @@ def pose_of(msg_pose, source="pose"):
 
 
 def to_ns(seconds) -> int:
-    """A time [s] as integer nanoseconds (bag and header stamps)."""
-    return int(round(float(seconds) * 1e9))
+    """A time [s] as integer nanoseconds (bag and header stamps), the nearest to the float itself
+    (whole seconds apart from the fraction: at 1.7e9 s a product with 1e9 would be 256 ns coarse)."""
+    seconds = float(seconds)
+    whole = math.floor(seconds)
+    return int(whole) * 1_000_000_000 + int(round((seconds - whole) * 1e9))
 
 
 def to_seconds(stamp) -> float:

@@ -10,9 +10,15 @@ truth). Reading them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`
 ROS 2 bags are written as ``ros2 bag record`` would: a folder ``NAME`` holding ``metadata.yaml``
 and one data file ``NAME_0.mcap`` (MCAP, the default storage since Jazzy) or ``NAME_0.db3``
 (sqlite3, Humble's default); ``/tf_static`` and ``/map`` are offered transient-local (latched), so a
-player's late subscriber still gets the laser mount and the map (ROS 1 bags: latching=1). Metadata: version 8 for
-``distro="humble"`` (default; offered QoS as a YAML string, which Humble's rosbag2 and every later
-one parse), version 9 for ``distro="jazzy"`` (QoS as a YAML list, which Humble cannot read).
+player's late subscriber still gets the laser mount and the map (ROS 1 bags: latching=1). The files
+are laid out as the chosen distro's rosbag2 writes them (:mod:`crfmap.io.rosbag2_files`: Humble's
+metadata version 5 and sqlite3 schema 3, or Jazzy's version 9 and schema 4); a ROS 1 bag's header
+record as rosbag writes it (:mod:`crfmap.io.rosbag1_files`), so ``rosbag reindex`` and append keep it.
+
+No message carries time 0 (as log time or header stamp): ROS reads a stamp of 0 as "no time" (tf2
+looks up the latest transform, ``rosbag play`` starts at 1 ns and skips it), so :func:`write_bag`
+refuses a recording with one; the simulator starts its clock at
+:data:`crfmap.sim.simulator.START_TIME` and ``crfmap convert`` shifts bags that start at 0.
 """
 from __future__ import annotations
 
@@ -58,7 +64,7 @@ def _check_recording(recording, name):
 
 
 STORAGES = ("mcap", "sqlite3")
-DISTROS = {"humble": 8, "jazzy": 9}  # the rosbag2 metadata version each writes
+DISTROS = {"humble": 5, "jazzy": 9}  # the rosbag2 metadata version each writes
 LATCHED_TOPICS = (TF_STATIC_TOPIC, MAP_TOPIC)
 
 
@@ -84,7 +90,8 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
     storage : {'mcap', 'sqlite3'}
         ROS2 storage plugin (data file ``NAME_0.mcap`` or ``NAME_0.db3``).
     distro : {'humble', 'jazzy'}
-        ROS2 metadata: version 8, read by Humble and later (default), or version 9 (Jazzy's own).
+        The rosbag2 whose files to write: Humble's (default; metadata version 5, sqlite3 schema 3;
+        every later rosbag2 reads them) or Jazzy's (version 9, schema 4; Humble cannot read them).
 
     Notes
     -----
@@ -115,38 +122,46 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
     make = MessageFactory(store, ros1=(fmt == "ros1"))
     messages = _recording_messages(recording, scans, make)  # [(ns, topic, msgtype, msg)]
     messages.sort(key=lambda m: m[0])  # stable: equal stamps keep their order
+    zero = [topic for ns, topic, _, msg in messages if ns <= 0 or _header_ns(msg) == 0]
+    if zero:
+        raise InputError(path, f"{len(zero)} messages ({', '.join(sorted(set(zero)))}) would carry time 0: ROS "
+                               "reads a stamp of 0 as 'no time' (tf2: the latest transform; rosbag play skips "
+                               "it); shift the recording's stamps (crfmap simulate --start-time)")
     if fmt == "ros2":
-        from rosbags.rosbag2 import StoragePlugin, Writer
+        from crfmap.io.rosbag2_files import Topic, write_rosbag2
 
-        plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+        topics = {}
+        for _, topic, msgtype, _ in messages:
+            topics.setdefault(topic, Topic(topic, msgtype, store, [offered_qos(topic)]))
+        serialized = [(ns, topic, store.serialize_cdr(msg, msgtype)) for ns, topic, msgtype, msg in messages]
         with atomic_dir(path) as tmp:
-            # rosbags names the data file after its folder: write in tmp/NAME_0, then move the
-            # files up, so that the bag folder NAME holds NAME_0.mcap as rosbag2 names it.
             tmp.mkdir()
-            inner = tmp / f"{path.name}_0"
-            with Writer(inner, version=DISTROS[distro], storage_plugin=plugin) as writer:
-                _write_all(writer, messages, store, store.serialize_cdr, qos=True)
-            for item in inner.iterdir():
-                item.rename(tmp / item.name)
-            inner.rmdir()
+            write_rosbag2(tmp, path.name, serialized, topics, storage, distro)
     else:
-        from rosbags.rosbag1 import Writer
+        from crfmap.io.rosbag1_files import Rosbag1Writer
 
         with atomic_path(path) as tmp:
             tmp.unlink()  # rosbags' writer refuses an existing file
-            with Writer(tmp) as writer:
+            with Rosbag1Writer(tmp) as writer:
                 _write_all(writer, messages, store, store.serialize_ros1)
     return path
 
 
-def _write_all(writer, messages, store, serialize, qos=False):
+def _header_ns(msg):
+    """The header stamp [ns] of a message, or None (no header); a TFMessage's smallest transform stamp."""
+    header = getattr(msg, "header", None)
+    if header is None and hasattr(msg, "transforms"):
+        stamps = [t.header.stamp for t in msg.transforms]
+        return min(s.sec * 1_000_000_000 + s.nanosec for s in stamps) if stamps else None
+    return None if header is None else header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+
+
+def _write_all(writer, messages, store, serialize):
     connections = {}
     for ns, topic, msgtype, msg in messages:
         if topic not in connections:
-            if qos:
-                extra = {"offered_qos_profiles": [offered_qos(topic)]}
-            else:  # ROS 1: the connection header's latching flag, as rosbag record keeps it
-                extra = {"latching": 1} if topic in LATCHED_TOPICS else {}
+            # the connection header's latching flag, as rosbag record keeps it
+            extra = {"latching": 1} if topic in LATCHED_TOPICS else {}
             connections[topic] = writer.add_connection(topic, msgtype, typestore=store, **extra)
         writer.write(connections[topic], ns, serialize(msg, msgtype))
 

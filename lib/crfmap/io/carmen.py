@@ -10,7 +10,11 @@ The n beams span 180 degrees counter-clockwise from the robot's right:
 ``angle_k = -pi/2 + k * pi / (n - 1)``. In the "corrected" logs both pose triples of a
 FLASER line hold the SLAM-corrected pose, which we use as the laser pose (a zero laser
 mount; ``robot_frontlaser_offset`` is 0 in these logs and is kept in ``meta``). ODOM
-lines are the raw odometry track. Other message types (NEFF, SYNC, ...) are skipped
+lines are the raw odometry track, cleaned of corrupt stamps (:func:`clean_odometry_stamps`: records
+stamped 0 or not after the previous one are dropped, with one warning saying how many) and checked
+for moves the stamps cannot explain (:func:`odometry_jumps`: kept, with a warning). FLASER lines keep
+their stamps as logged (a few run back by a tenth of a second; a bag orders them by time, and
+each is its own /tf knot, so the scans still resolve to their poses). Other message types (NEFF, SYNC, ...) are skipped
 and counted.
 
 No returns. A SICK scanner reports "nothing returned" as a reading at or beyond its
@@ -29,6 +33,7 @@ from __future__ import annotations
 
 import gzip
 import math
+import warnings
 import zlib
 from collections import Counter
 from pathlib import Path
@@ -49,6 +54,9 @@ _CHUNK = 8 << 20  # [bytes] read at a time, so that binary content is refused ea
 MAX_BEAMS = 100_000  # readings per FLASER line
 FLASER_FIXED_FIELDS = 9  # after the ranges: x y theta odom_x odom_y odom_theta ipc_ts hostname logger_ts
 ODOM_FIELDS = 9  # x y theta tv rv accel ipc_ts hostname logger_ts
+MAX_ODOM_SPEED = 2.0  # [m/s] faster than the robots of these logs drive (a Pioneer: 1.5 m/s) ...
+MAX_ODOM_TURN = math.pi  # [rad/s] ... or turn
+ODOM_JITTER = (0.25, 0.5)  # [m], [rad] moves this small pass whatever the stamps (logger timestamps jitter)
 
 
 def _read_text(path: Path) -> str:
@@ -146,6 +154,37 @@ def _max_range(ranges, params, path, max_range, no_return):
 _UNSET = object()
 
 
+def clean_odometry_stamps(stamps) -> np.ndarray:
+    """Which odometry records to keep: a stamp above 0 ns and above every earlier kept one.
+
+    The Intel log has ODOM lines stamped 0 (and 1e-153) among its real ones, and stamps that run
+    back by up to seconds; as ROS messages they would be odometry at "no time" (t = 0) and tf
+    going back in time. The first record of a run wins; later ones at or before it are dropped.
+
+    >>> clean_odometry_stamps(np.array([0.5, 0.0, 0.7, 0.6, 0.7, 0.9])).tolist()
+    [True, False, True, False, False, True]
+    """
+    keep = np.zeros(len(stamps), dtype=bool)
+    last = 0.0
+    for i, t in enumerate(np.asarray(stamps, dtype=np.float64)):
+        if round(t * 1e9) > 0 and t > last:
+            keep[i] = True
+            last = t
+    return keep
+
+
+def odometry_jumps(stamps, poses) -> np.ndarray:
+    """Indices i of the moves i -> i+1 faster than :data:`MAX_ODOM_SPEED` / :data:`MAX_ODOM_TURN` allow
+    over their time step, beyond :data:`ODOM_JITTER` (time-ordered ``stamps`` [s], ``poses`` (n, 3))."""
+    if len(stamps) < 2:
+        return np.zeros(0, dtype=np.int64)
+    dt = np.diff(stamps)
+    step = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+    turn = np.abs((np.diff(poses[:, 2]) + math.pi) % (2 * math.pi) - math.pi)
+    fast = (step > MAX_ODOM_SPEED * dt + ODOM_JITTER[0]) | (turn > MAX_ODOM_TURN * dt + ODOM_JITTER[1])
+    return np.nonzero(fast)[0]
+
+
 def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
     """Read a CARMEN log (plain or gzip) into a :class:`~crfmap.recording.Recording`.
 
@@ -166,7 +205,8 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
     Recording
         ``scans`` (laser poses = corrected FLASER poses in ``map``), ``true_poses``
         (the same poses as base_link in map), ``odometry`` (ODOM lines, with twists),
-        ``meta`` (PARAM values, counts, the maximum range and where it came from).
+        ``meta`` (PARAM values, counts, the maximum range and where it came from, ODOM records
+        dropped and jumps warned of).
 
     Examples
     --------
@@ -277,7 +317,7 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
         source=str(path),
     )
     true_poses = Trajectory(stamps.copy(), poses.copy(), frame_id="map", child_frame_id="base_link")
-    odometry = None
+    odometry, odometry_meta = None, {}
     if odom_rows:
         odom = _parse_rows(path, odom_rows, odom_lines, 8, "ODOM")
         if not np.all(np.isfinite(odom[:, :3])):
@@ -286,8 +326,22 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
         bad = ~np.isfinite(odom[:, 6]) | (np.abs(odom[:, 6]) > 1e11)
         if bad.any():
             raise InputError(path, f"line {odom_lines[int(np.argmax(bad))]}: ODOM timestamp is not a time")
+        keep = clean_odometry_stamps(odom[:, 6])
+        n_dropped = len(keep) - int(np.count_nonzero(keep))
+        if n_dropped:
+            warnings.warn(f"{path.name}: dropped {n_dropped} of {len(keep)} ODOM records with a zero or "
+                          "non-increasing timestamp (corrupt odometry)", stacklevel=2)
+        odom, odom_lines = odom[keep], [line for line, k in zip(odom_lines, keep) if k]
+        jumps = odometry_jumps(odom[:, 6], odom[:, :3])
+        if jumps.size:
+            i = int(jumps[0])
+            warnings.warn(f"{path.name}: {jumps.size} ODOM moves faster than {MAX_ODOM_SPEED:g} m/s or "
+                          f"{MAX_ODOM_TURN:.3g} rad/s that the log's timestamps cannot explain (first: line "
+                          f"{odom_lines[i + 1]}, {np.hypot(*(odom[i + 1, :2] - odom[i, :2])):.2f} m in "
+                          f"{odom[i + 1, 6] - odom[i, 6]:.3g} s); kept as logged", stacklevel=2)
         odometry = Trajectory(odom[:, 6].copy(), odom[:, :3].copy(), frame_id="odom",
                               child_frame_id="base_link", twists=odom[:, 3:5].copy())
+        odometry_meta = {"odometry_dropped": n_dropped, "odometry_jumps": int(jumps.size)}
     meta = {
         "source": str(path),
         "format": "carmen",
@@ -296,6 +350,7 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
         "max_range_source": code_source,
         "no_return_readings": n_no_return,
         "skipped_messages": dict(skipped),
+        **odometry_meta,
     }
     return Recording(scans=scans, laser_mount=(0.0, 0.0, 0.0), odometry=odometry,
                      true_poses=true_poses, meta=meta)

@@ -153,9 +153,14 @@ def _odometry_noise(value):
     return c, 0.0
 
 
+START_TIME = 1_700_000_000.0  # [s] 2023-11-14 22:13:20 UTC: the first stamp of a simulated run. ROS
+# users expect wall-clock-like stamps, and a stamp of 0 means "no time" to ROS (tf2: latest transform);
+# fixed, so that reruns are identical.
+
+
 def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, range_noise=0.0, range_sigma=0.0,
              odometry_noise=0.0, laser_mount=(0.0, 0.0, 0.0), start=None, dt=0.1, linear_speed=None,
-             angular_speed=1.5, t0=0.0, progress=True, **misplaced) -> Recording:
+             angular_speed=1.5, t0=START_TIME, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
     Parameters
@@ -175,7 +180,7 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
     start : (x, y, yaw) [m, rad] or None (``scene.start``)
     dt : float [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which
         only turns), ``angular_speed`` [rad/s] limits
-    t0 : float [s], stamp of the first pose
+    t0 : float [s], stamp of the first pose (default :data:`START_TIME`; a ROS bag refuses 0)
     progress : bool, show a progress bar for the ray casting
 
     Returns

@@ -1,0 +1,66 @@
+"""ROS 1 bag files whose header record is laid out as rosbag writes it, so reindex and append keep them.
+
+A ROS 1 bag (format 2.0) starts with ``#ROSBAG V2.0\\n`` and the bag-header record: a 4-byte
+header length, the header (``op``, ``index_pos``, ``conn_count``, ``chunk_count``), a 4-byte data
+length and space padding. rosbag (C++ ``Bag::writeFileHeaderRecord``, Python
+``Bag._write_file_header_record``) pads the *data* to ``4096 - header length``, so the record,
+with its two length fields, takes 4104 bytes. rosbags' Writer (0.11) pads the whole record to
+4096 bytes instead; every reader accepts that, but rosbag's reindex and append rewrite the header
+in place with rosbag's 4104 bytes, overwriting the first 8 bytes of the first chunk (the bag then
+reads as empty, or "Unindexed bag"). :class:`Rosbag1Writer` works around it: it reserves rosbag's
+4104 bytes when it opens the file and rewrites the record with rosbag's layout when it closes it.
+"""
+from __future__ import annotations
+
+import struct
+
+from rosbags.rosbag1 import Writer
+
+BAG_MAGIC = b"#ROSBAG V2.0\n"
+FILE_HEADER_LENGTH = 4096  # rosbag's _FILE_HEADER_LENGTH: header + padding, without the two length fields
+OP_FILE_HEADER = 0x03
+
+
+def file_header_record(index_pos, conn_count, chunk_count) -> bytes:
+    """The bag-header record exactly as rosbag record (C++) writes it: fields in std::map order, 4104 bytes."""
+    fields = {"chunk_count": struct.pack("<I", chunk_count), "conn_count": struct.pack("<I", conn_count),
+              "index_pos": struct.pack("<Q", index_pos), "op": bytes([OP_FILE_HEADER])}
+    header = b"".join(struct.pack("<I", len(k) + 1 + len(v)) + k.encode() + b"=" + v for k, v in fields.items())
+    padding = b" " * max(0, FILE_HEADER_LENGTH - len(header))
+    return struct.pack("<I", len(header)) + header + struct.pack("<I", len(padding)) + padding
+
+
+def parse_header_fields(header: bytes) -> dict:
+    """{name: raw value} of a ROS 1 record header (length-prefixed ``name=value`` fields)."""
+    fields, pos = {}, 0
+    while pos < len(header):
+        (size,) = struct.unpack_from("<I", header, pos)
+        name, _, value = header[pos + 4: pos + 4 + size].partition(b"=")
+        fields[name.decode()] = value
+        pos += 4 + size
+    return fields
+
+
+class Rosbag1Writer(Writer):
+    """rosbags' ROS 1 Writer with rosbag's bag-header record (see the module notes)."""
+
+    def open(self) -> None:
+        try:
+            self.bio = self.path.open("xb")
+        except FileExistsError:
+            from rosbags.rosbag1 import WriterError
+
+            raise WriterError(f"{self.path} exists already, not overwriting.") from None
+        self.bio.write(BAG_MAGIC + file_header_record(0, 0, 0))
+
+    def close(self) -> None:
+        super().close()  # writes the index, then its own 4096-byte header record over ours
+        with open(self.path, "r+b") as f:
+            f.seek(len(BAG_MAGIC))
+            (size,) = struct.unpack("<I", f.read(4))
+            fields = parse_header_fields(f.read(size))
+            record = file_header_record(struct.unpack("<Q", fields["index_pos"])[0],
+                                        struct.unpack("<I", fields["conn_count"])[0],
+                                        struct.unpack("<I", fields["chunk_count"])[0])
+            f.seek(len(BAG_MAGIC))
+            f.write(record)

@@ -1,0 +1,186 @@
+"""ROS 2 bag files laid out as each distro's rosbag2 writes them (sqlite3 or MCAP, and metadata.yaml).
+
+rosbags serializes the messages; the files around them follow rosbag2's own source, branch by
+branch (ros2/rosbag2: ``rosbag2_storage_default_plugins/.../sqlite_storage.cpp`` on ``humble``,
+``rosbag2_storage_sqlite3/.../sqlite_storage.cpp`` and ``rosbag2_storage_mcap/src/mcap_storage.cpp``
+on ``jazzy``, ``rosbag2_storage/.../metadata_io.cpp`` / ``yaml.hpp``):
+
+========================  =================================  ==========================================
+                          humble                             jazzy
+========================  =================================  ==========================================
+metadata.yaml             version 5: no custom_data,         version 9: QoS as a list,
+                          ros_distro or type hash; QoS as    ``type_description_hash`` per topic,
+                          a YAML string                      ``custom_data``, ``ros_distro: jazzy``
+sqlite3 ``schema``        schema_version 3                   schema_version 4
+sqlite3 ``topics``        no type_description_hash column    type_description_hash (RIHS01)
+sqlite3 other tables      ``metadata`` (left empty)          ``metadata`` (the bag's metadata YAML),
+                                                             ``message_definitions``
+MCAP metadata record      ``rosbag2``: ``ROS_DISTRO``        ``rosbag2``: ``serialized_metadata``
+MCAP channel metadata     offered_qos_profiles               offered_qos_profiles, topic_type_hash
+========================  =================================  ==========================================
+
+MCAP files are written with the ``mcap`` library (the reference implementation; rosbag2's C++
+plugin uses its C++ twin): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time =
+publish time, uncompressed chunks, summary and indexes.
+"""
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import yaml
+
+DISTRO_METADATA_VERSION = {"humble": 5, "jazzy": 9}
+DISTRO_DB_SCHEMA = {"humble": 3, "jazzy": 4}
+STORAGE_SUFFIX = {"mcap": ".mcap", "sqlite3": ".db3"}
+
+# The CREATE statements of each distro's SqliteStorage::initialize(), verbatim.
+_SQL_SCHEMA = ("CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro TEXT NOT NULL);")
+_SQL_METADATA = ("CREATE TABLE metadata(id INTEGER PRIMARY KEY,metadata_version INTEGER NOT NULL,"
+                 "metadata TEXT NOT NULL);")
+_SQL_MESSAGES = ("CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,"
+                 "timestamp INTEGER NOT NULL, data BLOB NOT NULL);")
+_SQL_INDEX = "CREATE INDEX timestamp_idx ON messages (timestamp ASC);"
+SQLITE_CREATE = {
+    "humble": [_SQL_SCHEMA, _SQL_METADATA,
+               "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
+               "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL);",
+               _SQL_MESSAGES, _SQL_INDEX],
+    "jazzy": [_SQL_SCHEMA, _SQL_METADATA,
+              "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
+              "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL,"
+              "type_description_hash TEXT NOT NULL);",
+              "CREATE TABLE message_definitions(id INTEGER PRIMARY KEY,topic_type TEXT NOT NULL,"
+              "encoding TEXT NOT NULL,encoded_message_definition TEXT NOT NULL,"
+              "type_description_hash TEXT NOT NULL);",
+              _SQL_MESSAGES, _SQL_INDEX],
+}
+
+
+class Topic:
+    """One topic of a bag: name, type, its message definition and hash, offered QoS profiles."""
+
+    def __init__(self, name, msgtype, store, qos):
+        self.name, self.msgtype, self.qos = name, msgtype, list(qos)
+        self.msgdef, _ = store.generate_msgdef(msgtype, ros_version=2)
+        self.type_hash = store.hash_rihs01(msgtype)
+        self.count = 0
+
+    def qos_text(self, distro):
+        """The offered QoS as the distro's storage plugin stores it: a YAML string (v8 ints, v9 names)."""
+        from rosbags.rosbag2.metadata import dump_qos_v8, dump_qos_v9
+
+        if distro == "humble":
+            return dump_qos_v8(self.qos)
+        return yaml.safe_dump(dump_qos_v9(self.qos), sort_keys=False, default_flow_style=False).strip()
+
+
+def write_rosbag2(folder: Path, name, messages, topics, storage, distro):
+    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` (``name``: the bag's, as rosbag2
+    names the data file after the bag folder).
+
+    ``messages``: (stamp [ns], topic name, serialized CDR bytes), in time order; ``topics``:
+    {name: :class:`Topic`} in the order they are offered. ``folder`` must exist and be empty.
+    """
+    data_name = f"{name}_0{STORAGE_SUFFIX[storage]}"
+    for _, topic, _ in messages:
+        topics[topic].count += 1
+    stamps = [ns for ns, _, _ in messages]
+    start, end = (min(stamps), max(stamps)) if stamps else (0, 0)
+    metadata = bag_metadata(data_name, storage, distro, list(topics.values()), start, end - start, len(messages))
+    if storage == "sqlite3":
+        _write_sqlite3(folder / data_name, messages, topics, distro, metadata)
+    else:
+        _write_mcap(folder / data_name, messages, topics, distro, metadata)
+    (folder / "metadata.yaml").write_text(
+        yaml.safe_dump({"rosbag2_bagfile_information": metadata}, sort_keys=False, default_flow_style=False),
+        encoding="utf-8")
+
+
+def bag_metadata(data_name, storage, distro, topics, start, duration, count):
+    """The ``rosbag2_bagfile_information`` of the distro's ``convert<BagMetadata>::encode``."""
+    version = DISTRO_METADATA_VERSION[distro]
+    infos = []
+    for t in topics:
+        meta = {"name": t.name, "type": t.msgtype, "serialization_format": "cdr"}
+        if version >= 9:
+            from rosbags.rosbag2.metadata import dump_qos_v9
+
+            meta["offered_qos_profiles"] = dump_qos_v9(t.qos)
+            meta["type_description_hash"] = t.type_hash
+        else:
+            meta["offered_qos_profiles"] = t.qos_text(distro)
+        infos.append({"topic_metadata": meta, "message_count": t.count})
+    out = {
+        "version": version,
+        "storage_identifier": storage,
+        "duration": {"nanoseconds": int(duration)},
+        "starting_time": {"nanoseconds_since_epoch": int(start)},
+        "message_count": int(count),
+        "topics_with_message_count": infos,
+        "compression_format": "",
+        "compression_mode": "",
+        "relative_file_paths": [data_name],
+        "files": [{"path": data_name, "starting_time": {"nanoseconds_since_epoch": int(start)},
+                   "duration": {"nanoseconds": int(duration)}, "message_count": int(count)}],
+    }
+    if version >= 9:
+        out["custom_data"] = {}
+        out["ros_distro"] = distro
+    return out
+
+
+def _write_sqlite3(path, messages, topics, distro, metadata):
+    conn = sqlite3.connect(path)
+    try:
+        for statement in SQLITE_CREATE[distro]:
+            conn.execute(statement)
+        conn.execute("INSERT INTO schema (schema_version, ros_distro) VALUES (?, ?)", (DISTRO_DB_SCHEMA[distro], distro))
+        ids = {}
+        for t in topics.values():
+            if distro == "humble":
+                cur = conn.execute("INSERT INTO topics (name, type, serialization_format, offered_qos_profiles) "
+                                   "VALUES (?, ?, ?, ?)", (t.name, t.msgtype, "cdr", t.qos_text(distro)))
+            else:
+                cur = conn.execute("INSERT INTO topics(name, type, serialization_format, offered_qos_profiles, "
+                                   "type_description_hash) VALUES (?, ?, ?, ?, ?)",
+                                   (t.name, t.msgtype, "cdr", t.qos_text(distro), t.type_hash))
+            ids[t.name] = cur.lastrowid
+        if distro != "humble":
+            for msgtype in dict.fromkeys(t.msgtype for t in topics.values()):
+                t = next(t for t in topics.values() if t.msgtype == msgtype)
+                conn.execute("INSERT INTO message_definitions (topic_type, encoding, encoded_message_definition, "
+                             "type_description_hash) VALUES (?, ?, ?, ?)", (msgtype, "ros2msg", t.msgdef, t.type_hash))
+        conn.executemany("INSERT INTO messages (timestamp, topic_id, data) VALUES (?, ?, ?);",
+                         ((ns, ids[name], data) for ns, name, data in messages))
+        if distro != "humble":  # SqliteStorage::update_metadata (schema >= 3; Humble's plugin has none)
+            conn.execute("INSERT INTO metadata (metadata_version, metadata) VALUES (?, ?)",
+                         (metadata["version"], yaml.safe_dump(metadata, sort_keys=False)))
+        conn.commit()
+    finally:
+        conn.close()
+
+
+def _write_mcap(path, messages, topics, distro, metadata):
+    from mcap.writer import CompressionType, Writer
+
+    from crfmap import __version__
+
+    with open(path, "wb") as f:
+        writer = Writer(f, compression=CompressionType.NONE)
+        writer.start(profile="ros2", library=f"crfmap {__version__} (python mcap)")
+        if distro == "humble":  # MCAPStorage::ensure_rosdistro_metadata_added, at open
+            writer.add_metadata("rosbag2", {"ROS_DISTRO": distro})
+        schemas, channels = {}, {}
+        for t in topics.values():
+            if t.msgtype not in schemas:
+                schemas[t.msgtype] = writer.register_schema(t.msgtype, "ros2msg", t.msgdef.encode("utf-8"))
+            channel_meta = {"offered_qos_profiles": t.qos_text(distro)}
+            if distro != "humble":
+                channel_meta["topic_type_hash"] = t.type_hash
+            channels[t.name] = writer.register_channel(t.name, "cdr", schemas[t.msgtype], channel_meta)
+        for ns, name, data in messages:
+            writer.add_message(channels[name], log_time=ns, data=bytes(data), publish_time=ns, sequence=0)
+        if distro != "humble":  # MCAPStorage::update_metadata, at close
+            writer.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(metadata, sort_keys=False)})
+        writer.finish()
