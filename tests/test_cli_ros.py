@@ -43,3 +43,32 @@ def test_simulate_sqlite3_jazzy_and_ros1_refuses_storage(tmp_path, capsys):
     assert "--storage" in capsys.readouterr().err
     assert main(["convert", str(out), str(tmp_path / "conv")]) == 0
     assert sorted(p.name for p in (tmp_path / "conv").iterdir()) == ["conv_0.mcap", "metadata.yaml"]
+
+
+def _log_times(path):
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([path]) as reader:
+        return [(c.topic, t) for c, t, _ in reader.messages()]
+
+
+def test_simulate_start_time_sets_the_first_stamp_and_refuses_zero(tmp_path, capsys):
+    out = tmp_path / "s.bag"
+    assert main(["simulate", "x", str(out), "--format", "ros1", "--mode", "look", "--quiet", "--beams", "8",
+                 "--start-time", "1234.5"]) == 0
+    times = _log_times(out)
+    assert min(t for _, t in times) == 1_234_500_000_000
+    assert main(["simulate", "x", str(tmp_path / "z.bag"), "--format", "ros1", "--quiet", "--start-time", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--start-time" in err and len(err.strip().splitlines()) == 1
+
+
+def test_convert_drops_zero_stamped_odometry_with_one_warning(tmp_path, capsys):
+    log = tmp_path / "c.log"
+    log.write_text("FLASER 3 1.0 2.0 3.0 0 0 0 0 0 0 0.30 pippo 0.30\n"
+                   "ODOM 0 0 0 0 0 0 0.10 pippo 0.10\nODOM 5 5 0 0 0 0 0 pippo 0\n"
+                   "ODOM 0.01 0 0 0 0 0 0.35 pippo 0.35\n")
+    with pytest.warns(UserWarning, match="dropped 1 of 3 ODOM records with a zero or non-increasing timestamp"):
+        assert main(["convert", str(log), str(tmp_path / "c.bag")]) == 0  # the CLI shows it on stderr
+    odom = [t for topic, t in _log_times(tmp_path / "c.bag") if topic == "/odom"]
+    assert odom == [100_000_000, 350_000_000]

@@ -212,3 +212,50 @@ def test_a_zero_stamp_is_refused_and_convert_shifts_a_zero_start(tmp_path):
     np.testing.assert_allclose(shifted.scans.stamps, rec.scans.stamps, rtol=0, atol=1e-6)
     _check_bag(write_bag(shifted, tmp_path / "s.bag", fmt="ros1"), shifted)
     assert shift_zero_start(rec, "new.bag") is rec
+
+
+TF2_SCRIPT = """
+import json, math, sys, warnings
+import genpy, rosbag, tf2_py
+warnings.simplefilter("ignore")  # tf2_py asks for geometry_msgs classes; rosbag's generated ones work
+buf, scans = tf2_py.BufferCore(genpy.Duration(1e6)), []
+with rosbag.Bag(sys.argv[1]) as bag:
+    for topic, msg, _ in bag.read_messages(start_time=genpy.Time(0, 1)):  # rosbag play's query
+        if topic in ("/tf", "/tf_static"):
+            for tr in msg.transforms:
+                (buf.set_transform_static if topic == "/tf_static" else buf.set_transform)(tr, "bag")
+        elif topic == "/scan":
+            scans.append(msg.header)
+out = []
+for h in scans:
+    tr = buf.lookup_transform_core("map", h.frame_id, h.stamp)
+    q, p = tr.transform.rotation, tr.transform.translation
+    out.append([h.stamp.to_nsec(), p.x, p.y, math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y ** 2 + q.z ** 2))])
+print(json.dumps(out))
+"""
+
+
+def _debian_tf2():
+    import subprocess
+    from pathlib import Path
+
+    if not Path("/usr/bin/python3").exists():
+        return "no /usr/bin/python3"
+    probe = subprocess.run(["/usr/bin/python3", "-c", "import rosbag, tf2_py"], capture_output=True)
+    return None if probe.returncode == 0 else "Debian's python3-tf2 and python3-rosbag are not installed"
+
+
+@pytest.mark.skipif(_debian_tf2() is not None, reason=str(_debian_tf2()))
+def test_ros1_tf2_itself_resolves_every_scan_to_its_pose(tmp_path):
+    import json
+    import subprocess
+
+    rec = simulated()
+    path = write_bag(rec, tmp_path / "sim.bag", fmt="ros1")
+    out = subprocess.run(["/usr/bin/python3", "-c", TF2_SCRIPT, str(path)], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    got = np.array(json.loads(out.stdout))
+    assert len(got) == len(rec.scans)  # every scan played, none at time 0
+    np.testing.assert_allclose(got[:, 1:3], rec.scans.laser_poses[:, :2], atol=1e-6)
+    np.testing.assert_allclose(np.remainder(got[:, 3] - rec.scans.laser_poses[:, 2] + np.pi, 2 * np.pi) - np.pi, 0,
+                               atol=1e-6)

@@ -157,3 +157,53 @@ def test_intel_beam_order_is_right():
     right = _wall_agreement(s)
     s.ranges = np.ascontiguousarray(s.ranges[:, ::-1])
     assert right > 2 * _wall_agreement(s)
+
+
+# --- corrupt odometry -------------------------------------------------------------------------------
+CORRUPT_ODOM = """FLASER 3 1.0 2.0 3.0 0 0 0 0 0 0 0.30 pippo 0.30
+ODOM 0.00 0 0 0 0 0 0.10 pippo 0.10
+ODOM 7.00 3 1 0 0 0 0 pippo 0
+ODOM 0.05 0 0 0 0 0 0.20 pippo 0.20
+ODOM 6.00 2 0 0 0 0 0.15 pippo 0.15
+ODOM 6.50 2 0 0 0 0 0.20 pippo 0.20
+ODOM 0.10 0 0 0 0 0 1.2e-153 pippo 0
+ODOM 0.10 0 0 0 0 0 0.30 pippo 0.30
+ODOM 3.10 0 0 0 0 0 0.40 pippo 0.40
+"""
+
+
+def test_corrupt_odometry_is_dropped_with_one_warning_and_jumps_are_warned_of(tmp_path):
+    path = tmp_path / "corrupt.log"
+    path.write_text(CORRUPT_ODOM)
+    with pytest.warns(UserWarning) as caught:
+        rec = read_carmen(path)
+    lines = [str(w.message) for w in caught]
+    assert len(lines) == 2 and all("\n" not in line for line in lines)
+    assert "dropped 4 of 8 ODOM records with a zero or non-increasing timestamp" in lines[0]
+    # 0.30 -> 0.40 s: 3 m in 0.1 s, which no stamp explains: kept, and said (line 9 of the log)
+    assert "1 ODOM moves faster than 2 m/s" in lines[1] and "line 9, 3.00 m in 0.1 s" in lines[1]
+    np.testing.assert_array_equal(rec.odometry.stamps, [0.10, 0.20, 0.30, 0.40])
+    np.testing.assert_array_equal(rec.odometry.poses[:, 0], [0.0, 0.05, 0.10, 3.10])
+    assert rec.meta["odometry_dropped"] == 4 and rec.meta["odometry_jumps"] == 1
+    assert len(rec.scans) == 1
+
+
+def test_clean_odometry_keeps_a_clean_log_silent(log_file):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rec = read_carmen(log_file)
+    assert rec.meta["odometry_dropped"] == 0 and rec.meta["odometry_jumps"] == 0
+
+
+@pytest.mark.skipif(not paths.have_data(INTEL), reason="the Intel log is not downloaded")
+def test_intel_odometry_has_no_zero_or_backward_stamps():
+    with pytest.warns(UserWarning, match="dropped") as caught:
+        rec = read_carmen(paths.data_file(INTEL))
+    stamps = rec.odometry.stamps
+    assert np.all(np.round(stamps * 1e9) > 0) and np.all(np.diff(stamps) > 0)
+    assert len(stamps) + rec.meta["odometry_dropped"] == 14541 and rec.meta["odometry_dropped"] > 867
+    steps = np.hypot(*np.diff(rec.odometry.poses[:, :2], axis=0).T)
+    assert steps.max() < 1.0  # the log had 254 jumps over 1 m once its zero-stamped records sat at t = 0
+    assert len(caught) <= 2

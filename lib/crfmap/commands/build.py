@@ -16,13 +16,14 @@ def is_carmen_log(path) -> bool:
     return str(path).lower().endswith(CARMEN_SUFFIXES)
 
 
-def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None):
+def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None, uses_odometry=False):
     """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``.
 
     For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom'
     the raw ODOM track interpolated at the scan stamps ('tf' does not apply).
     ``max_range`` [m] (CARMEN only): readings at or beyond it are no-returns (see
-    :func:`crfmap.io.carmen.read_carmen`).
+    :func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller writes the odometry out
+    (``convert``), so a log's corrupt ODOM records are warned of (as they are for ``pose_source='odom'``).
     """
     from crfmap.checks import check_path_arg
 
@@ -39,7 +40,8 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, 
         raise InputError("--scan-topic", "applies to bags only, not to CARMEN logs")
     if laser_mount is not None:
         raise InputError("--laser-mount", "applies to bags only (CARMEN FLASER poses are laser poses)")
-    rec = read_carmen(path, max_range="auto" if max_range is None else max_range)
+    rec = read_carmen(path, max_range="auto" if max_range is None else max_range,
+                      warn=uses_odometry or pose_source == "odom")
     rec.meta["pose_source"] = "truth"
     if pose_source == "tf":
         raise InputError("--pose-source", "a CARMEN log has no tf; use truth (corrected poses) or odom")

@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(out)
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
-                         laser_mount=args.laser_mount, max_range=args.max_range)
+                         laser_mount=args.laser_mount, max_range=args.max_range, uses_odometry=True)
     rec = shift_zero_start(rec, args.input)
     write_bag(rec, out, fmt=fmt, **ros2_bag_kwargs(args, fmt))
     n_odom = len(rec.odometry) if rec.odometry is not None else 0

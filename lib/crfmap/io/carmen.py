@@ -185,7 +185,7 @@ def odometry_jumps(stamps, poses) -> np.ndarray:
     return np.nonzero(fast)[0]
 
 
-def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
+def read_carmen(path, max_range="auto", no_return=_UNSET, warn=True) -> Recording:
     """Read a CARMEN log (plain or gzip) into a :class:`~crfmap.recording.Recording`.
 
     Parameters
@@ -199,6 +199,9 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
         reading as it is.
     no_return : float, 'auto' or None
         Older name of ``max_range`` (used when given).
+    warn : bool
+        Warn (one line each) of dropped ODOM records and of moves their stamps cannot explain;
+        the counts are in ``meta`` either way (callers that use only the scans pass False).
 
     Returns
     -------
@@ -328,12 +331,12 @@ def read_carmen(path, max_range="auto", no_return=_UNSET) -> Recording:
             raise InputError(path, f"line {odom_lines[int(np.argmax(bad))]}: ODOM timestamp is not a time")
         keep = clean_odometry_stamps(odom[:, 6])
         n_dropped = len(keep) - int(np.count_nonzero(keep))
-        if n_dropped:
+        if n_dropped and warn:
             warnings.warn(f"{path.name}: dropped {n_dropped} of {len(keep)} ODOM records with a zero or "
                           "non-increasing timestamp (corrupt odometry)", stacklevel=2)
         odom, odom_lines = odom[keep], [line for line, k in zip(odom_lines, keep) if k]
         jumps = odometry_jumps(odom[:, 6], odom[:, :3])
-        if jumps.size:
+        if jumps.size and warn:
             i = int(jumps[0])
             warnings.warn(f"{path.name}: {jumps.size} ODOM moves faster than {MAX_ODOM_SPEED:g} m/s or "
                           f"{MAX_ODOM_TURN:.3g} rad/s that the log's timestamps cannot explain (first: line "
