@@ -82,8 +82,9 @@ def add_ros2_bag_options(p):
                    help="ROS 2 storage: mcap (default; rosbag2's default since Jazzy, Humble reads it with "
                    "ros-humble-rosbag2-storage-mcap) or sqlite3 (Humble's default)")
     p.add_argument("--distro", choices=["humble", "jazzy"], default=None,
-                   help="ROS 2 bag metadata: humble (default: version 8, read by Humble and every later "
-                   "rosbag2) or jazzy (version 9, as Jazzy records; Humble cannot read it)")
+                   help="whose rosbag2 files to write: humble (default: metadata version 5, sqlite3 schema 3; "
+                   "every later rosbag2 reads them) or jazzy (version 9, schema 4, type hashes; Humble cannot "
+                   "read them)")
 
 
 def ros2_bag_kwargs(args, fmt):
