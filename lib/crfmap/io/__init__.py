@@ -3,7 +3,8 @@
 Public API (imported on first use, so ``import crfmap.io`` stays cheap):
 
 - :mod:`crfmap.io.bag_reader`: ``read_bag``
-- :mod:`crfmap.io.bag_writer`: ``write_bag``
+- :mod:`crfmap.io.bag_writer`: ``write_bag`` (the files as rosbag and each distro's rosbag2 lay them out:
+  :mod:`crfmap.io.rosbag1_files`, :mod:`crfmap.io.rosbag2_files`)
 - :mod:`crfmap.io.carmen`: ``read_carmen``
 - :mod:`crfmap.io.map_server`: ``load_map``, ``save_map``, ``read_map_yaml``, ``map_yaml_text``
 - :mod:`crfmap.io.grid_files`: ``load_grid``, ``save_grid`` (by suffix)
