@@ -81,3 +81,11 @@ def test_cached_scores_are_reproduced_on_intel():
     cached = ps.load_cached()
     sp = scan_split(load_recording(paths.data_file(ps.TRAINING)).scans, ps.TRAINING_RESOLUTION)
     assert ps.search_brier(sp, cached["best"]) == pytest.approx(cached["best_brier"], abs=1e-9)
+
+
+def test_command_refuses_bad_arguments_and_missing_data(tmp_path, monkeypatch, capsys):
+    assert ps.main(["--nope"]) == 2
+    monkeypatch.setenv("CRFMAP_DATA", str(tmp_path))
+    assert ps.main([]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and err[1].startswith("crfmap preset search:") and "intel" in err[1].lower()
