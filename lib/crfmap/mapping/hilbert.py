@@ -86,24 +86,34 @@ def _lam(xi):
 
 
 @njit(cache=True, nogil=True)
-def _fit_batch(ptr, idx, val, y, mu, sig, n_iter, acc_prec, acc_b):  # pragma: no cover - compiled
-    """The authors' closed-form rounds on one batch; ``mu``, ``sig`` (prior in, posterior out) in place."""
+def _fit_batch(ptr, idx, val, y, mu, sig, n_iter, acc_prec, acc_b, mark, batch, touched, mu0, sig0):  # pragma: no cover
+    """The authors' closed-form rounds on one batch; ``mu``, ``sig`` (prior in, posterior out) in place.
+
+    ``mark`` (one int per feature, below ``batch`` on entry) finds the batch's features without sorting;
+    ``touched``, ``mu0``, ``sig0`` are work buffers of one entry per feature.
+    """
     n = ptr.size - 1
-    touched = np.unique(idx)
-    mu0 = mu[touched].copy()
-    sig0 = sig[touched].copy()
+    m = 0
+    for k in range(idx.size):
+        f = idx[k]
+        if mark[f] != batch:
+            mark[f] = batch
+            touched[m] = f
+            mu0[m] = mu[f]
+            sig0[m] = sig[f]
+            m += 1
     xi = np.ones(n)
     for _ in range(n_iter):
-        for f in touched:
-            acc_prec[f] = 0.0
-            acc_b[f] = 0.0
+        for t in range(m):
+            acc_prec[touched[t]] = 0.0
+            acc_b[touched[t]] = 0.0
         for i in range(n):
             lam2 = 2.0 * _lam(xi[i])
             r = y[i] - 0.5
             for k in range(ptr[i], ptr[i + 1]):
                 acc_prec[idx[k]] += lam2 * val[k] * val[k]
                 acc_b[idx[k]] += r * val[k]
-        for t in range(touched.size):
+        for t in range(m):
             f = touched[t]
             sig[f] = 1.0 / (1.0 / sig0[t] + acc_prec[f])
             mu[f] = sig[f] * (mu0[t] / sig0[t] + acc_b[f])
@@ -153,7 +163,10 @@ class HilbertMap:
         self.ny = int(math.floor((ymax - ymin) / self.spacing + 1e-9)) + 1
         self.mu = np.zeros(self.nx * self.ny)
         self.sig = np.full(self.nx * self.ny, self.prior_variance)
-        self._acc = (np.zeros_like(self.mu), np.zeros_like(self.mu))
+        d = self.mu.size
+        self._mark = np.full(d, -1, np.int64)
+        self._work = (np.zeros(d), np.zeros(d))
+        self._buffers = (np.empty(d, np.int64), np.empty(d), np.empty(d))
         self.batches = 0
 
     @property
@@ -176,7 +189,8 @@ class HilbertMap:
             raise InputError("labels", f"expected {len(points)} labels of 0 or 1")
         ptr, idx, val = self.features(points)
         if idx.size:
-            _fit_batch(ptr, idx, val, y, self.mu, self.sig, self.em_iterations, *self._acc)
+            _fit_batch(ptr, idx, val, y, self.mu, self.sig, self.em_iterations, *self._work, self._mark, self.batches,
+                       *self._buffers)
         self.batches += 1
 
     def predict(self, points) -> np.ndarray:
