@@ -43,11 +43,11 @@ from crfmap.errors import InputError
 PRIOR_VARIANCE = 10_000.0  # the authors' first prior N(0, 10^4) on every weight
 EM_ITERATIONS = 3  # closed-form rounds per batch (scan), as the authors' code
 CUTOFF = 4.0  # [length scales] features beyond are dropped (exp(-8) = 3e-4 of the peak)
-# Chosen on the Intel log only (notebook 10's "Published peers" section records the search; paper/generated/
-# beyond_hilbert_search.json), then fixed for every recording:
-FEATURE_SPACING = 0.25  # [m] between RBF centres
-LENGTH_SCALE = 0.25  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2)
-FREE_SPACING = 0.25  # [m] between free points sampled along a beam
+# Chosen on the Intel log only, by the scan-split Brier score (the search: crfmap.assess.peers.HILBERT_SEARCH_INTEL,
+# saved with notebook 10's results in paper/generated/beyond_peers.json), then fixed for every recording:
+FEATURE_SPACING = 0.075  # [m] between RBF centres
+LENGTH_SCALE = 0.03  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2) = 556 / m^2
+FREE_SPACING = 0.075  # [m] between free points sampled along a beam
 
 
 @njit(cache=True, nogil=True)
