@@ -41,6 +41,28 @@ def test_evaluate_table_and_json_match_the_library(tmp_path, capsys):
     assert got["raw"]["unseen"]["cells"] == expected["raw"]["unseen"]["cells"]
 
 
+def test_evaluate_methods_select_rows_and_peers_are_in_the_json(tmp_path, capsys):
+    log = _room_log(tmp_path / "room.log")
+    common = [str(log), "--resolution", "0.1", "--boot", "5"]
+    assert main(["evaluate", *common, "--methods", "certainty,octomap,hilbert"]) == 0
+    out = capsys.readouterr().out
+    for name in ("raw", "certainty", "octomap", "hilbert"):
+        assert f"| {name} |" in out
+    assert "| thesis |" not in out and "peer wall time: octomap" in out
+    assert main(["evaluate", *common, "--methods", "octomap,hilbert", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert set(got) == {"raw", "octomap", "hilbert", "_seconds", "_ece"}
+    assert got["octomap"]["all"]["brier_ci"][0] <= got["octomap"]["all"]["brier"] <= got["octomap"]["all"]["brier_ci"][1]
+    assert 0 <= got["_ece"]["hilbert"] <= 1
+    assert main(["evaluate", *common, "--methods", "certainty,octomap", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    vs = got["_vs_preset"]["octomap"]["all"]
+    assert vs["brier_diff"] == pytest.approx(got["octomap"]["all"]["brier"] - got["certainty"]["all"]["brier"])
+    assert main(["evaluate", *common, "--methods", "octomap,nope"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--methods" in err and "nope" in err
+
+
 @pytest.mark.parametrize("args, words", [
     (["--boot", "-1"], ["--boot"]),
     (["--resolution", "0"], ["--resolution"]),

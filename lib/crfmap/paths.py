@@ -33,6 +33,10 @@ DATA_SOURCES = {
     "(Radish data set; e.g. the public repository acschaefer/ple, data/carmen/)",
     "carmen/aces-corrected.log.gz": "ACES building CARMEN log with corrected poses "
     "(Radish data set; e.g. the public repository acschaefer/ple, data/carmen/)",
+    "carmen/csail-corrected.log.gz": "MIT CSAIL building CARMEN log with corrected poses "
+    "(Radish data set; the public repository acschaefer/ple, data/carmen/)",
+    "carmen/freiburg-101-corrected.log.gz": "Freiburg building 101 CARMEN log with corrected poses "
+    "(Radish data set; the public repository acschaefer/ple, data/carmen/)",
     "rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2": "ROS2 bag of a TurtleBot4 "
     "(public repository comprobo24/robot_localization, bags/)",
     "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml": "map_server map of the same "

@@ -88,8 +88,11 @@ def graph_cut(observation, hidden, region=None) -> np.ndarray:
     return out
 
 
-def all_baselines(split, thesis_max_iter: int = 1000) -> dict:
-    """{name: P} of every baseline for a scan split's first half (needs ``split.first_scans`` for log-odds).
+BASELINES = ("raw", "logodds", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut")
+
+
+def all_baselines(split, thesis_max_iter: int = 1000, names=BASELINES) -> dict:
+    """{name: P} of the baselines ``names`` for a scan split's first half (needs ``split.first_scans`` for log-odds).
 
     ``raw`` (arctan grid), ``logodds`` (the Probabilistic Robotics update), ``mean3x3``,
     ``median3x3``, ``closing3x3``, ``thesis`` (LBP with the thesis's tables on the raw grid) and
@@ -97,17 +100,26 @@ def all_baselines(split, thesis_max_iter: int = 1000) -> dict:
     """
     from crfmap.crf.presets import get_preset
 
+    unknown = [n for n in names if n not in BASELINES]
+    if unknown:
+        raise InputError("baselines", f"unknown baseline(s) {', '.join(unknown)}; known: {', '.join(BASELINES)}")
     raw = split.raw_probability()
     out = {"raw": raw}
-    if split.first_scans is not None:
+    if split.first_scans is not None and "logodds" in names:
         from crfmap.mapping.builder import build_grid
 
         out["logodds"] = build_grid(split.first_scans, split.resolution, bounds=split.bounds,
                                     model="logodds").probability
-    out["mean3x3"] = window_mean(raw)
-    out["median3x3"] = window_median(raw)
-    out["closing3x3"] = grey_closing(raw)
-    thesis = get_preset("thesis")
-    out["thesis"] = thesis.refine(raw, max_iter=thesis_max_iter).beliefs.probability
-    out["graphcut"] = graph_cut(raw, thesis.hidden)
+    if "mean3x3" in names:
+        out["mean3x3"] = window_mean(raw)
+    if "median3x3" in names:
+        out["median3x3"] = window_median(raw)
+    if "closing3x3" in names:
+        out["closing3x3"] = grey_closing(raw)
+    if "thesis" in names or "graphcut" in names:
+        thesis = get_preset("thesis")
+        if "thesis" in names:
+            out["thesis"] = thesis.refine(raw, max_iter=thesis_max_iter).beliefs.probability
+        if "graphcut" in names:
+            out["graphcut"] = graph_cut(raw, thesis.hidden)
     return out

@@ -318,23 +318,45 @@ def _interval(values, alpha):
 
 
 def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, block: int = DEFAULT_BLOCK,
-            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False) -> dict:
-    """Score every baseline (:func:`crfmap.assess.baselines.all_baselines`) and ``preset`` on a split.
+            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None) -> dict:
+    """Score the baselines (:func:`crfmap.assess.baselines.all_baselines`), ``preset`` and peers on a split.
 
-    Returns the :func:`score` dictionary with ``"raw"`` as the paired reference; the preset's
-    LBP result summary is under ``"_lbp"``; ``keep_beliefs``: every scored ``{name: P}`` under
-    ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more ``{name: P}`` rows.
+    ``methods``: the rows to score, by name (baselines, ``preset``, the published peers of
+    :data:`crfmap.assess.peers.PEERS`); None means every baseline and the preset (no peers).
+    ``"raw"`` is always scored, as the paired reference. Returns the :func:`score` dictionary;
+    the preset's LBP result summary is under ``"_lbp"``, each peer's wall time [s] under
+    ``"_seconds"``, every other row's paired Brier and log-loss differences to the preset under
+    ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``); ``keep_beliefs``: every scored ``{name: P}`` under ``"_beliefs"`` too (arrays:
+    for a caller scoring them again). ``extra`` adds more ``{name: P}`` rows.
     """
-    from crfmap.assess.baselines import all_baselines
+    from crfmap.assess.baselines import BASELINES, all_baselines
+    from crfmap.assess.peers import PEERS, peer_rows
     from crfmap.crf.presets import get_preset
 
-    predictions = all_baselines(split)
-    result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes, max_iter=5000)
-    predictions[preset] = result.beliefs.probability
+    wanted = list(BASELINES) + [preset] if methods is None else list(methods)
+    unknown = [m for m in wanted if m not in BASELINES and m not in PEERS and m != preset]
+    if unknown:
+        raise InputError("methods", f"unknown row(s) {', '.join(unknown)}; known: "
+                         f"{', '.join(list(BASELINES) + [preset] + list(PEERS))}")
+    predictions = all_baselines(split, names=[m for m in wanted if m in BASELINES])
+    out_lbp = None
+    if preset in wanted:
+        result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes, max_iter=5000)
+        predictions[preset] = result.beliefs.probability
+        out_lbp = {"converged": result.converged, "iterations": result.iterations, "last_change": result.last_change}
+    peers, seconds = peer_rows(split, [m for m in wanted if m in PEERS])
+    predictions.update(peers)
     predictions.update(extra or {})
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
-    out["_lbp"] = {"converged": result.converged, "iterations": result.iterations,
-                   "last_change": result.last_change}
+    if out_lbp is not None:
+        out["_lbp"] = out_lbp
+    if seconds:
+        out["_seconds"] = seconds
+    if preset in predictions and len(predictions) > 1:  # every row against the preset, on the same resamples
+        versus = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference=preset,
+                       metrics=("brier", "logloss"))
+        out["_vs_preset"] = {name: {g: {k: v for k, v in entry.items() if "_diff" in k} for g, entry in groups.items()}
+                             for name, groups in versus.items() if name != preset}
     if keep_beliefs:
         out["_beliefs"] = predictions
     return out

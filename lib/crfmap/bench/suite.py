@@ -24,6 +24,8 @@ Methods:
 - ``online-intel`` / ``online-intel-margin`` / ``online-intel-final`` / ``builder-intel``: the
   Intel lab log at 5 cm (when the data is present): scan-by-scan mapping (LBP on a 4 m disc; with
   ``-margin`` only its cells near observations), the final map against an offline run.
+- ``peers-<recording>`` (with the online rows): wall time of the published peers (OctoMap's update,
+  Bayesian Hilbert maps) and the default preset on each CARMEN log's even scans (:mod:`crfmap.bench.peers`).
 - ``memory``: peak resident memory of :func:`crfmap.crf.lbp.infer` per cell, in a child process.
 - ``pgmax-bp`` / ``pymaxflow-map``: when installed, PGMax's LBP and a PyMaxflow graph cut on the
   same model (:mod:`crfmap.bench.external`); a "not installed" record otherwise.
@@ -302,8 +304,10 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             yield peak_memory_per_cell(size)
         elif kind == "online":
             from crfmap.bench.online import bench_online
+            from crfmap.bench.peers import bench_peers
 
             yield from bench_online(quick=quick, final_tol=online_tol)
+            yield from bench_peers(quick=quick)
         elif kind == "external":
             from crfmap.bench.external import run_external
 

@@ -10,16 +10,21 @@ from crfmap.errors import InputError
 def add_parser(sub):
     p = sub.add_parser(
         "evaluate",
-        help="score the raw grid, baselines and a preset against scans the map never saw",
+        help="score the raw grid, baselines, a preset and published peers against scans the map never saw",
         description="Scan-split validation (crfmap.assess.scansplit): build the grid from the even scans of a "
         "CARMEN log or ROS bag, refine it, and score P(occupied) against what the odd scans observe (a "
         "returned beam's end cell occupied, cells it passes free): Brier score, log-loss, AUC and recall of "
         "observed walls, for all cells the odd scans observed and for those the even scans saw / never saw, "
-        "with spatial-block bootstrap intervals.",
+        "with spatial-block bootstrap intervals, and the expected calibration error. Rows: the baselines, the "
+        "preset and the published peers octomap (OctoMap's clamped log-odds update) and hilbert (Bayesian "
+        "Hilbert maps).",
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
     p.add_argument("--preset", default="certainty", choices=["certainty", "thesis"], help="the preset to score")
+    p.add_argument("--methods", default="all", help="comma-separated rows to score (default all: raw, logodds, "
+                   "mean3x3, median3x3, closing3x3, thesis, graphcut, the preset, octomap, hilbert); raw is always "
+                   "scored")
     p.add_argument("--parity", type=int, default=0, choices=[0, 1], help="build from even (0) or odd (1) scans")
     p.add_argument("--boot", type=int, default=200, help="bootstrap resamples (0: no intervals)")
     p.add_argument("--block", type=int, default=16, help="bootstrap block side in cells")
@@ -29,7 +34,22 @@ def add_parser(sub):
     return p
 
 
+def _methods(text, preset):
+    from crfmap.assess.baselines import BASELINES
+    from crfmap.assess.peers import PEERS
+
+    known = list(BASELINES) + [preset] + list(PEERS)
+    if text.strip() == "all":
+        return known
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise InputError("--methods", f"unknown row(s) {', '.join(unknown) or '(none given)'}; known: {', '.join(known)}")
+    return ["raw"] + [n for n in names if n != "raw"]
+
+
 def run(args: argparse.Namespace) -> int:
+    from crfmap.assess.calibration import split_calibration
     from crfmap.assess.scansplit import compare, scan_split, table_rows
     from crfmap.commands.build import load_recording
     from crfmap.repro.report import markdown_table
@@ -40,16 +60,26 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--block", f"must be a positive number of cells, got {args.block}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be positive, got {args.resolution}")
+    methods = _methods(args.methods, args.preset)
     rec = load_recording(args.input)
     split = scan_split(rec.scans, args.resolution, parity=args.parity)
-    scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed)
+    scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed, methods=methods,
+                     keep_beliefs=True)
+    beliefs = scores.pop("_beliefs")
+    calibration = split_calibration(split, beliefs, group=args.group)
+    scores["_ece"] = {name: c["ece"] for name, c in calibration.items()}
     if args.json:
         print(json.dumps(_finite(scores)))
         return 0
-    header = ["method", "Brier", "95% CI", "log-loss", "95% CI", "AUC", "95% CI", "wall recall", "95% CI"]
+    header = ["method", "Brier", "95% CI", "log-loss", "95% CI", "AUC", "95% CI", "wall recall", "95% CI", "ECE"]
+    lbp = scores.get("_lbp")
+    state = "" if lbp is None else f"; {args.preset}: {'converged' if lbp['converged'] else 'NOT converged'}"
     print(f"{args.input}: {split.shape[1]}x{split.shape[0]} cells, {args.group} cells the second half observed "
-          f"({scores['raw'][args.group]['cells']}); {args.preset}: {'converged' if scores['_lbp']['converged'] else 'NOT converged'}")
-    print(markdown_table(header, table_rows(scores, args.group)), end="")
+          f"({scores['raw'][args.group]['cells']}){state}")
+    rows = [row + [scores["_ece"][row[0]]] for row in table_rows(scores, args.group)]
+    print(markdown_table(header, rows), end="")
+    if "_seconds" in scores:
+        print("peer wall time: " + ", ".join(f"{n} {s:.1f} s" for n, s in scores["_seconds"].items()))
     return 0
 
 

@@ -1,0 +1,172 @@
+"""OctoMap's occupancy update (Hornung et al. 2013) on a 2-D grid: the ``octomap`` peer.
+
+What OctoMap does with one scan (``OccupancyOcTreeBase::insertPointCloud`` with its defaults,
+``computeUpdate``; read from OctoMap's source, OctoMap/octomap):
+
+1. every returned beam's end point marks its cell *occupied*; the cells the beam crosses on the
+   way, from the sensor's cell up to but excluding the end cell, are *free*. The crossed cells
+   are those of Amanatides & Woo's voxel traversal (``computeRayKeys``): every cell the segment
+   enters, 4-connected in 2-D (Bresenham's 8-connected line skips corner cells);
+2. the free and occupied sets are sets: a cell many beams pass is updated once per scan; a
+   cell that is both free and occupied in the same scan counts as occupied only;
+3. each free cell gets ``l += logit(p_miss)``, each occupied one ``l += logit(p_hit)``, and
+   ``l`` is then clamped to ``[logit(clamp_min), logit(clamp_max)]`` (``updateNodeLogOdds``),
+   in float32 like OctoMap's nodes. Never-updated cells stay unknown (P = 0.5).
+
+Defaults are OctoMap's (``AbstractOccupancyOcTree``): hit 0.7, miss 0.4, clamping 0.1192 / 0.971
+(log-odds -2 / +3.5). The octree is only OctoMap's storage: at one fixed resolution its
+leaves are this grid's cells. Readings follow REP 117 as in :mod:`crfmap.mapping.builder`
+(no-returns dropped unless ``free_on_no_return``, which clears up to that range like OctoMap's
+``maxrange``); a beam leaving the grid clears cells up to the edge and marks nothing occupied.
+
+>>> from crfmap.recording import ScanSet
+>>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
+>>> octomap_grid(s, 0.1, bounds=(0, 0, 0.5, 0.1)).probability.round(2).tolist()
+[[0.4, 0.4, 0.4, 0.4, 0.7]]
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from crfmap.errors import InputError
+from crfmap.grid import UNKNOWN, OccupancyGrid
+from crfmap.mapping._beam_kernels import _HIT, _SKIP, _classify
+
+# OctoMap's defaults (octomap/src/AbstractOccupancyOcTree.cpp)
+P_HIT = 0.7
+P_MISS = 0.4
+CLAMP_MIN = 0.1192  # log-odds -2.0
+CLAMP_MAX = 0.971  # log-odds +3.5
+
+
+@njit(cache=True, nogil=True)
+def _ray_cells(u0, v0, u1, v1, width, height, out):
+    """Cells (x, y) OctoMap's ``computeRayKeys`` lists from (u0, v0) to (u1, v1) [cell units].
+
+    The start cell and every cell the segment then enters, excluding the end cell; the walk also
+    stops on leaving the grid or when it overshoots the segment's length (OctoMap's guard against
+    rounding). Ties (a corner) step in y, as OctoMap's minimum over (x, y, z) does. Returns the count.
+    """
+    x, y = int(math.floor(u0)), int(math.floor(v0))
+    xe, ye = int(math.floor(u1)), int(math.floor(v1))
+    if x == xe and y == ye:
+        return 0
+    n = 0
+    out[n, 0], out[n, 1] = x, y
+    n += 1
+    du, dv = u1 - u0, v1 - v0
+    length = math.sqrt(du * du + dv * dv)
+    du, dv = du / length, dv / length
+    big = 1.7976931348623157e308  # OctoMap's numeric_limits<double>::max()
+    sx = 1 if du > 0 else (-1 if du < 0 else 0)
+    sy = 1 if dv > 0 else (-1 if dv < 0 else 0)
+    tx = ((x + 0.5 + 0.5 * sx) - u0) / du if sx != 0 else big
+    ty = ((y + 0.5 + 0.5 * sy) - v0) / dv if sy != 0 else big
+    dtx = 1.0 / abs(du) if sx != 0 else big
+    dty = 1.0 / abs(dv) if sy != 0 else big
+    while True:
+        if tx < ty:
+            x += sx
+            tx += dtx
+        else:
+            y += sy
+            ty += dty
+        if x == xe and y == ye:
+            break
+        if min(tx, ty) > length:
+            break
+        if x < 0 or x >= width or y < 0 or y >= height:
+            break
+        out[n, 0], out[n, 1] = x, y
+        n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _octomap_update(ranges, angles, poses, range_min, range_max, max_is_no_return, free_range,
+                    origin_x, origin_y, resolution, l_hit, l_miss, l_min, l_max, logodds, hit_stamp, miss_stamp,
+                    scan_offset, buf):  # pragma: no cover - compiled; tested against a hand-worked case and OctoMap
+    """Apply every scan's update to ``logodds[y, x]`` (float32, in place); returns beams used."""
+    height, width = logodds.shape
+    n_beams = ranges.shape[1]
+    kinds = np.zeros(n_beams, np.int64)
+    ends = np.empty((n_beams, 2), np.float64)
+    used = 0
+    for i in range(ranges.shape[0]):
+        scan_id = scan_offset + i
+        u0 = (poses[i, 0] - origin_x) / resolution
+        v0 = (poses[i, 1] - origin_y) / resolution
+        # the occupied set: end cells of returned beams inside the grid
+        for k in range(n_beams):
+            kind, length = _classify(ranges[i, k], range_min, range_max, max_is_no_return, free_range)
+            kinds[k] = kind
+            if kind == _SKIP:
+                continue
+            used += 1
+            a = poses[i, 2] + angles[k]
+            u1 = u0 + length * math.cos(a) / resolution
+            v1 = v0 + length * math.sin(a) / resolution
+            ends[k, 0], ends[k, 1] = u1, v1
+            xe, ye = int(math.floor(u1)), int(math.floor(v1))
+            inside = 0 <= xe < width and 0 <= ye < height
+            if kind == _HIT and inside:
+                if hit_stamp[ye, xe] != scan_id:
+                    hit_stamp[ye, xe] = scan_id
+                    l = logodds[ye, xe] + l_hit
+                    logodds[ye, xe] = min(max(l, l_min), l_max)
+            elif kind == _HIT:
+                kinds[k] = -1  # a hit outside the grid: free cells up to the edge only
+        # the free set minus the occupied set, each cell once
+        for k in range(n_beams):
+            if kinds[k] == _SKIP:
+                continue
+            n = _ray_cells(u0, v0, ends[k, 0], ends[k, 1], width, height, buf)
+            for j in range(n):
+                x, y = buf[j, 0], buf[j, 1]
+                if hit_stamp[y, x] != scan_id and miss_stamp[y, x] != scan_id:
+                    miss_stamp[y, x] = scan_id
+                    l = logodds[y, x] + l_miss
+                    logodds[y, x] = min(max(l, l_min), l_max)
+    return used
+
+
+def _logit(p, name):
+    if not (isinstance(p, (int, float, np.floating)) and 0.0 < float(p) < 1.0):
+        raise InputError(name, f"must be a probability strictly between 0 and 1, got {p!r}")
+    return math.log(float(p) / (1.0 - float(p)))
+
+
+def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, clamp_min=CLAMP_MIN,
+                 clamp_max=CLAMP_MAX, free_on_no_return=False, max_range_is_no_return=True) -> OccupancyGrid:
+    """Occupancy grid of OctoMap's clamped log-odds update, one update per cell and scan.
+
+    Same grid as :func:`crfmap.mapping.build_grid` for the same ``scans``, ``resolution`` and
+    ``bounds``; ``probability`` is ``sigmoid(l)`` where a cell was updated, 0.5 elsewhere.
+    """
+    from crfmap.mapping.builder import _geometry
+
+    l_hit, l_miss = _logit(p_hit, "p_hit"), _logit(p_miss, "p_miss")
+    l_min, l_max = _logit(clamp_min, "clamp_min"), _logit(clamp_max, "clamp_max")
+    if not (l_hit > 0 > l_miss):
+        raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
+    if not (l_min < 0 < l_max):
+        raise InputError("clamp_min/clamp_max", f"need clamp_min < 0.5 < clamp_max, got {clamp_min!r} and {clamp_max!r}")
+    g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
+    shape = (g["height"], g["width"])
+    logodds = np.zeros(shape, np.float32)
+    hit_stamp = np.full(shape, -1, np.int64)
+    miss_stamp = np.full(shape, -1, np.int64)
+    buf = np.empty((2 * (g["width"] + g["height"]) + 4, 2), np.int64)
+    f32 = np.float32
+    used = _octomap_update(g["ranges"], g["angles"], g["poses"], g["range_min"], g["range_max"], g["max_is_no_return"],
+                           g["free_range"], g["origin_x"], g["origin_y"], g["resolution"], f32(l_hit), f32(l_miss),
+                           f32(l_min), f32(l_max), logodds, hit_stamp, miss_stamp, 0, buf)
+    probability = 1.0 / (1.0 + np.exp(-logodds.astype(np.float64)))
+    probability[(hit_stamp < 0) & (miss_stamp < 0)] = UNKNOWN
+    meta = {"model": "octomap", "scans": len(g["ranges"]), "beams_used": int(used), "p_hit": float(p_hit),
+            "p_miss": float(p_miss), "clamp_min": float(clamp_min), "clamp_max": float(clamp_max)}
+    return OccupancyGrid(probability, resolution=g["resolution"], origin=(g["origin_x"], g["origin_y"], 0.0),
+                         frame_id=getattr(scans, "frame_id", "map") or "map", meta=meta)

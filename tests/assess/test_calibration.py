@@ -1,0 +1,54 @@
+"""Calibration: reliability bins and ECE by hand, the temperature against a brute-force search."""
+import numpy as np
+import pytest
+
+from crfmap.assess.calibration import (apply_temperature, expected_calibration_error, fit_temperature, reliability,
+                                       split_calibration)
+from crfmap.assess.scansplit import ScanSplit
+from crfmap.errors import InputError
+
+
+def test_reliability_by_hand():
+    p = np.array([0.05, 0.15, 0.15, 0.55, 0.95, 1.0])
+    y = np.array([0, 0, 1, 1, 1, 0])
+    r = reliability(p, y, bins=4)  # bins [0, .25) [.25, .5) [.5, .75) [.75, 1]; P = 1 falls in the last
+    assert r["count"].tolist() == [3, 0, 1, 2]
+    np.testing.assert_allclose(r["mean_p"][[0, 2, 3]], [0.35 / 3, 0.55, 0.975])
+    np.testing.assert_allclose(r["share"][[0, 2, 3]], [1 / 3, 1.0, 0.5])
+    assert np.isnan(r["share"][1])
+    expected = (3 * abs(0.35 / 3 - 1 / 3) + abs(0.55 - 1) + 2 * abs(0.975 - 0.5)) / 6
+    assert expected_calibration_error(p, y, bins=4) == pytest.approx(expected)
+
+
+def test_calibrated_predictions_have_small_ece():
+    rng = np.random.default_rng(1)
+    p = rng.uniform(0, 1, 200_000)
+    y = rng.uniform(0, 1, p.size) < p
+    assert expected_calibration_error(p, y) < 0.01
+    assert expected_calibration_error(apply_temperature(p, 0.3), y) > 0.1  # sharpened: over-confident
+
+
+def test_temperature_recovers_a_known_softening():
+    rng = np.random.default_rng(2)
+    true = rng.uniform(0.02, 0.98, 100_000)
+    y = (rng.uniform(0, 1, true.size) < true).astype(float)
+    over = apply_temperature(true, 0.5)  # an over-confident map: the right correction is T = 2
+    t = fit_temperature(over, y)
+    grid = np.exp(np.linspace(np.log(0.5), np.log(8), 400))
+    losses = [np.mean(-(y * np.log(apply_temperature(over, g)) + (1 - y) * np.log(1 - apply_temperature(over, g))))
+              for g in grid]
+    assert t == pytest.approx(grid[int(np.argmin(losses))], rel=0.01)
+    assert t == pytest.approx(2.0, rel=0.05)
+    assert apply_temperature(np.array([0.5]), 3.0)[0] == 0.5
+
+
+def test_split_calibration_and_errors():
+    sp = ScanSplit(np.array([[2, 0, 0]]), np.array([[0, 3, 0]]), np.array([[1, 0, 2]]), np.array([[0, 1, 0]]))
+    out = split_calibration(sp, {"raw": sp.raw_probability()}, bins=2)
+    assert out["raw"]["count"].tolist() == [1, 2] and 0 <= out["raw"]["ece"] <= 1
+    with pytest.raises(InputError, match="probabilities"):
+        reliability(np.array([1.5]), np.array([1]))
+    with pytest.raises(InputError, match="temperature"):
+        apply_temperature(np.array([0.2]), 0)
+    with pytest.raises(InputError, match="shape"):
+        split_calibration(sp, {"bad": np.zeros((2, 2))})

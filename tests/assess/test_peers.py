@@ -1,0 +1,35 @@
+"""The peers' scan-split rows: the same maps as the mapping functions, on the split's grid."""
+import numpy as np
+import pytest
+
+from crfmap.assess.peers import peer_rows
+from crfmap.assess.scansplit import ScanSplit, scan_split
+from crfmap.errors import InputError
+from crfmap.mapping.hilbert import hilbert_grid
+from crfmap.mapping.octomap import octomap_grid
+from crfmap.recording import ScanSet
+
+
+def _scans(n=6, seed=0):
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack([rng.uniform(1.8, 2.2, n), rng.uniform(1.8, 2.2, n), rng.uniform(-3, 3, n)])
+    return ScanSet(rng.uniform(0.5, 1.5, (n, 30)).astype(np.float32), -np.pi / 2, np.pi / 29, 0.1, 5.0, poses,
+                   np.arange(n, dtype=float))
+
+
+def test_rows_are_the_mapping_functions_on_the_first_half():
+    sp = scan_split(_scans(), 0.1)
+    rows, seconds = peer_rows(sp)
+    assert set(rows) == set(seconds) == {"octomap", "hilbert"} and all(s >= 0 for s in seconds.values())
+    np.testing.assert_array_equal(rows["octomap"], octomap_grid(sp.first_scans, 0.1, bounds=sp.bounds).probability)
+    np.testing.assert_array_equal(rows["hilbert"], hilbert_grid(sp.first_scans, 0.1, sp.bounds).probability)
+    assert all(r.shape == sp.shape for r in rows.values())
+
+
+def test_errors_name_the_problem():
+    sp = scan_split(_scans(), 0.1)
+    with pytest.raises(InputError, match="nope"):
+        peer_rows(sp, ["nope"])
+    bare = ScanSplit(*(np.zeros((3, 3), int) for _ in range(4)))
+    with pytest.raises(InputError, match="first half's scans"):
+        peer_rows(bare, ["octomap"])
