@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
@@ -317,7 +318,7 @@ def _interval(values, alpha):
     return (float(np.quantile(v, alpha)), float(np.quantile(v, 1 - alpha)))
 
 
-def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, block: int = DEFAULT_BLOCK,
+def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, block: int = DEFAULT_BLOCK,
             seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False) -> dict:
     """Score every baseline (:func:`crfmap.assess.baselines.all_baselines`) and ``preset`` on a split.
 
@@ -326,7 +327,6 @@ def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, bloc
     ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more ``{name: P}`` rows.
     """
     from crfmap.assess.baselines import all_baselines
-    from crfmap.crf.presets import get_preset
 
     predictions = all_baselines(split)
     result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes, max_iter=5000)

@@ -19,7 +19,8 @@ def add_parser(sub):
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
-    p.add_argument("--preset", default="certainty", choices=["certainty", "thesis"], help="the preset to score")
+    p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
+                   help="the preset to score (default: crfmap.crf.model.presets.DEFAULT_PRESET, certainty)")
     p.add_argument("--parity", type=int, default=0, choices=[0, 1], help="build from even (0) or odd (1) scans")
     p.add_argument("--boot", type=int, default=200, help="bootstrap resamples (0: no intervals)")
     p.add_argument("--block", type=int, default=16, help="bootstrap block side in cells")
@@ -40,6 +41,13 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--block", f"must be a positive number of cells, got {args.block}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be positive, got {args.resolution}")
+    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+
+    args.preset = DEFAULT_PRESET if args.preset is None else args.preset
+    try:
+        get_preset(args.preset)
+    except InputError as e:
+        raise InputError("--preset", e.problem) from None
     rec = load_recording(args.input)
     split = scan_split(rec.scans, args.resolution, parity=args.parity)
     scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed)
