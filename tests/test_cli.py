@@ -1,5 +1,6 @@
 """The infer and metrics commands: results, one-line errors with exit status 2, nothing half-written."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -7,7 +8,7 @@ import pytest
 from crfmap.cli import main
 from crfmap.io.grid_files import load_grid, save_grid
 from crfmap.grid import OccupancyGrid
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.lbp import infer
 from crfmap.paths import data_file, have_data
 
 OLIN = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"
@@ -55,14 +56,30 @@ def test_infer_margin_keeps_far_unknown_cells(tmp_path):
     assert out[10, 7] > 0.5  # within the margin: filled from the neighbours
 
 
-def test_infer_default_is_the_certainty_preset(tmp_path):
-    from crfmap.crf.presets import get_preset
+def test_infer_default_is_the_default_preset(tmp_path):
+    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
 
     grid, _ = noisy_grid(3)
     save_grid(grid, tmp_path / "in.npy")
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy")]) == 0
-    expected = get_preset("certainty").refine(grid, max_iter=1000).beliefs.probability
-    np.testing.assert_allclose(load_grid(tmp_path / "out.npy").probability, expected)
+    expected = get_preset(DEFAULT_PRESET).refine(grid, max_iter=1000).beliefs.probability
+    np.testing.assert_array_equal(load_grid(tmp_path / "out.npy").probability, expected)
+
+
+@pytest.mark.parametrize("argv, preset", [
+    (["--preset", "thesis"], lambda P: P.get_preset("thesis")),
+    (["--preset", "thesis", "--margin", "2"], lambda P: replace(P.get_preset("thesis"), margin=2)),
+    (["--hidden", "4,1,1,4", "--margin", "2"], lambda P: P.custom_preset([[4, 1], [1, 4]], margin=2)),
+    (["--hidden", "10,1,2,10", "--pairing", "oriented"], lambda P: P.custom_preset([[10, 1], [2, 10]], pairing="oriented")),
+])
+def test_infer_runs_a_preset_named_or_made_from_the_tables(tmp_path, argv, preset):
+    from crfmap.crf.model import presets
+
+    grid, _ = noisy_grid(4)
+    save_grid(grid, tmp_path / "in.npy")
+    assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), *argv]) == 0
+    expected = preset(presets).refine(grid).beliefs.probability
+    np.testing.assert_array_equal(load_grid(tmp_path / "out.npy").probability, expected)
 
 
 def test_metrics_json(tmp_path, capsys):
@@ -114,6 +131,10 @@ def _bad(tmp_path):
     (["infer", "{d}/good.npy", "{d}/o.npy", "--hidden", "1,-2,1,1"], ["--hidden", "non-negative"]),
     (["infer", "{d}/good.npy", "{d}/o.npy", "--link", "0,0,1,1"], ["--link", "all zero"]),
     (["infer", "{d}/good.npy", "{d}/o.txt"], ["o.txt"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--pairing", "oriented"], ["--pairing", "certainty preset"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "thesis", "--pairing", "receiver"], ["--pairing", "thesis"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "thesis", "--hidden", "4,1,1,4"], ["--preset", "custom"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "nope"], ["--preset", "certainty, thesis"]),
     (["metrics", "{d}/good.npy", "{d}/other.npy"], ["shape"]),
 ])
 def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, args, words):

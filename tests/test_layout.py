@@ -1,5 +1,6 @@
 """The package layout: every subpackage's public API resolves, no import circles, no private names across subpackages."""
 import ast
+import json
 import importlib
 from pathlib import Path
 
@@ -103,3 +104,34 @@ def test_no_private_name_across_subpackages():
 def test_modules_stay_small():
     big = {str(p.relative_to(LIB)): n for p in LIB.rglob("*.py") if (n := len(p.read_text().splitlines())) > 420}
     assert not big, f"modules over ~400 lines: {big}"
+
+
+def _crf_private_imports(tree):
+    """``from crfmap.crf... import _name`` or any import of a ``crfmap.crf`` module with a private part."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("crfmap.crf"):
+            parts = node.module.split(".")[2:]
+            names = [a.name for a in node.names]
+            if any(p.startswith("_") for p in parts) or any(n.startswith("_") for n in names):
+                yield f"from {node.module} import {', '.join(names)}"
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("crfmap.crf") and any(p.startswith("_") for p in a.name.split(".")[2:]):
+                    yield f"import {a.name}"
+
+
+def test_nothing_outside_crf_imports_a_private_name_of_crf():
+    """crf/'s kernels stay behind its public functions: library, tests of other packages and notebooks."""
+    root = LIB.parents[1]
+    offenders = []
+    files = [p for p in LIB.rglob("*.py") if "crf" not in p.relative_to(LIB).parts[:1]]
+    files += [p for p in (root / "tests").rglob("*.py") if p.relative_to(root / "tests").parts[0] != "crf"]
+    for path in files:
+        offenders += [f"{path.relative_to(root)}: {s}" for s in _crf_private_imports(ast.parse(path.read_text()))]
+    for path in sorted((root / "notebooks").glob("*.ipynb")):
+        for cell in json.loads(path.read_text())["cells"]:
+            if cell["cell_type"] == "code":
+                source = "\n".join(line for line in "".join(cell["source"]).splitlines()
+                                   if not line.lstrip().startswith(("%", "!")))
+                offenders += [f"{path.name}: {s}" for s in _crf_private_imports(ast.parse(source))]
+    assert not offenders, "\n".join(offenders)

@@ -154,3 +154,14 @@ class OccupancyGrid:
     def known(self) -> np.ndarray:
         """Boolean mask of observed cells (P not exactly 0.5)."""
         return self.probability != UNKNOWN
+
+
+def as_grid(grid, name="grid") -> OccupancyGrid:
+    """``grid`` itself if it is an :class:`OccupancyGrid`, else a checked array of P(occupied) as one (default metadata).
+
+    >>> as_grid([[0.5, 1.0]]).shape
+    (1, 2)
+    """
+    if isinstance(grid, OccupancyGrid):
+        return grid
+    return OccupancyGrid(check_probability_array(grid, name))

@@ -6,7 +6,7 @@ import pytest
 
 from crfmap.assess import ablations
 from crfmap.assess.scansplit import ScanSplit
-from crfmap.crf.presets import get_preset
+from crfmap.crf.model.presets import get_preset
 from crfmap.errors import InputError
 
 

@@ -11,7 +11,7 @@ from crfmap.assess.learning import (
     pseudolikelihood,
     rescale,
 )
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.lbp import infer
 
 
 def toy(seed=0, sigma=0.35):

@@ -7,7 +7,7 @@ import pytest
 from crfmap import paths
 from crfmap.assess import preset_search as ps
 from crfmap.assess.scansplit import ScanSplit
-from crfmap.crf.presets import get_preset
+from crfmap.crf.model.presets import get_preset
 from crfmap.errors import InputError
 
 

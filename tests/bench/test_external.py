@@ -9,10 +9,11 @@ import sys
 import numpy as np
 import pytest
 
+from crfmap.assess import graph_cut as G
 from crfmap.bench import external as E
 from crfmap.errors import InputError
-from crfmap.crf.exact import exact_marginals
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.exact import exact_marginals
+from crfmap.crf.inference.lbp import infer
 
 KEYS = {"method", "size", "dtype", "threads", "seconds_per_iteration", "mcells_per_second"}
 NON_SYMMETRIC = np.array([[3.0, 0.7], [1.3, 2.5]])
@@ -91,20 +92,20 @@ def test_run_external_skips_large_sizes_and_stops_after_a_failure(monkeypatch):
 def test_crf_energy_equals_a_cell_by_cell_sum():
     rng = np.random.default_rng(4)
     observed = rng.uniform(0.0, 1.0, (4, 5))
-    observed[0, 0] = 0.0  # floored like crfmap.crf.lbp.infer
+    observed[0, 0] = 0.0  # floored like crfmap.crf.inference.lbp.infer
     for hidden in (E.DEFAULT_HIDDEN, NON_SYMMETRIC):
         for _ in range(5):
             occupied = rng.uniform(size=(4, 5)) < 0.5
-            assert E.crf_energy(occupied, observed, hidden) == pytest.approx(naive_energy(occupied, observed, hidden),
+            assert G.crf_energy(occupied, observed, hidden) == pytest.approx(naive_energy(occupied, observed, hidden),
                                                                                rel=1e-12)
     with pytest.raises(InputError, match="occupied"):
-        E.crf_energy(np.zeros((2, 2), bool), observed)
+        G.crf_energy(np.zeros((2, 2), bool), observed)
 
 
 @pytest.mark.parametrize("hidden", [[[10.0, 1.0], [1.0, 10.0]], [[5.0, 1.0], [1.0, 2.0]], [[0.9, 0.3], [0.3, 0.2]]])
 def test_potts_weight_reproduces_every_entry_of_the_table(hidden):
     hidden = np.array(hidden)
-    w, shift, constant = E.potts_weight(hidden)
+    w, shift, constant = G.potts_weight(hidden)
     assert w >= 0
     for xa, xb in itertools.product((0, 1), repeat=2):  # x = 1 occupied = table index 0
         expected = -np.log(hidden[1 - xa, 1 - xb])
@@ -114,7 +115,7 @@ def test_potts_weight_reproduces_every_entry_of_the_table(hidden):
 @pytest.mark.parametrize("hidden", [NON_SYMMETRIC, [[1.0, 3.0], [3.0, 1.0]], [[1.0, 0.0], [0.0, 1.0]]])
 def test_potts_weight_refuses_tables_a_cut_cannot_solve(hidden):
     with pytest.raises(InputError, match="hidden"):
-        E.potts_weight(hidden)
+        G.potts_weight(hidden)
 
 
 # --- PyMaxflow ------------------------------------------------------------------------------------------
@@ -128,7 +129,7 @@ def test_graph_cut_finds_the_brute_force_map(seed, hidden):
     observed = np.random.default_rng(seed).uniform(0.0, 1.0, (3, 3))
     labellings = [np.array(bits, bool).reshape(3, 3) for bits in itertools.product((False, True), repeat=9)]
     energies = np.array([naive_energy(lab, observed, hidden) for lab in labellings])
-    labels, flow_energy = E.graph_cut_map(observed, hidden)
+    labels, flow_energy = G.graph_cut_map(observed, hidden)
     assert naive_energy(labels, observed, hidden) == pytest.approx(energies.min(), abs=1e-9)
     assert flow_energy == pytest.approx(energies.min(), abs=1e-9)  # max-flow value + constants
     if np.sort(energies)[1] - energies.min() > 1e-9:  # a unique minimiser: the labels themselves
@@ -139,9 +140,9 @@ def test_graph_cut_handles_strips():
     pytest.importorskip("maxflow")
     for shape in ((1, 6), (5, 1)):
         observed = np.random.default_rng(9).uniform(0.0, 1.0, shape)
-        labels, flow_energy = E.graph_cut_map(observed)
+        labels, flow_energy = G.graph_cut_map(observed)
         assert labels.shape == shape
-        assert flow_energy == pytest.approx(E.crf_energy(labels, observed), abs=1e-9)
+        assert flow_energy == pytest.approx(G.crf_energy(labels, observed), abs=1e-9)
 
 
 def test_maxflow_records_map_energy_at_most_the_lbp_labels():

@@ -8,7 +8,8 @@ import pytest
 
 from crfmap.bench import suite as bench
 from crfmap.cli import main
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.inference.lbp import infer
 
 KEYS = {"method", "size", "dtype", "threads", "seconds_per_iteration", "mcells_per_second"}
 
@@ -60,7 +61,7 @@ def test_numpy_baseline_equals_the_plain_kernel(shape, hidden):
     obs = np.random.default_rng(7).uniform(0.0, 1.0, shape)
     nb = bench.NumpyCheckerboard(obs, hidden, dtype=np.float64)
     nb.iterate(6)
-    plain = infer(obs, hidden, max_iter=6, tol=0.0, kernel="plain")
+    plain = infer(obs, hidden, max_iter=6, tol=0.0, schedule=Checkerboard(kernel="plain"))
     np.testing.assert_allclose(nb.beliefs(), plain.beliefs.probability, atol=1e-8)
 
 

@@ -2,9 +2,11 @@
 import numpy as np
 from numba import njit
 
-from crfmap.crf import _lbp_kernels as K
-from crfmap.crf.compiling import MESSAGE, announce, needs_compiling
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.engine import messages as M
+from crfmap.crf.inference import _plain_kernels as K
+from crfmap.crf.inference.compiling import announce, MESSAGE, needs_compiling
+from crfmap.crf.inference.lbp import infer
 
 
 def test_note_for_a_kernel_not_yet_compiled_and_not_after(capsys):
@@ -21,8 +23,8 @@ def test_note_for_a_kernel_not_yet_compiled_and_not_after(capsys):
 
 
 def test_no_note_once_infer_has_run(capsys):
-    infer(np.full((4, 4), 0.6), max_iter=2, kernel="plain")
+    infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     capsys.readouterr()
-    assert not needs_compiling(K._checkerboard_iteration) and not needs_compiling(K._beliefs)
-    infer(np.full((4, 4), 0.6), max_iter=2, kernel="plain")
+    assert not needs_compiling(K._checkerboard_iteration) and not needs_compiling(M._beliefs)
+    infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     assert capsys.readouterr().err == ""

@@ -2,15 +2,21 @@
 import numpy as np
 import pytest
 
-from crfmap.crf.evidence import FREE, certain_states
-from crfmap.crf.exact import exact_marginals
-from crfmap.crf.lbp import infer
-from crfmap.crf.potentials import directional_tables
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.model.evidence import certain_states, UNCERTAIN
+from crfmap.crf.inference.exact import exact_marginals
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.potentials import directional_tables
 from crfmap.errors import InputError
 
 RUNS = [("auto", "checkerboard"), ("plain", "checkerboard"), ("plain", "flooding"), ("plain", "sweep"),
         ("plain", "thesis")]
 WALLED = np.array([[1.0, 1.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
+
+
+def _schedule(schedule, kernel):
+    """The settings of ``schedule`` on ``kernel`` (a choice of the checkerboard schedule only)."""
+    return Checkerboard(kernel=kernel) if schedule == "checkerboard" else schedule
 
 
 @pytest.mark.parametrize("kernel,schedule", RUNS)
@@ -22,7 +28,7 @@ WALLED = np.array([[1.0, 1.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
     (np.array([[1.0, 0.4, 0.0, 0.7, 1.0, 0.5]]), [[50, 1], [1, 50]]),
 ])
 def test_issue_cases_match_exact_enumeration(grid, table, kernel, schedule, dtype):
-    r = infer(grid, table, kernel=kernel, schedule=schedule, dtype=dtype, max_iter=2000, tol=1e-12)
+    r = infer(grid, table, schedule=_schedule(schedule, kernel), dtype=dtype, max_iter=2000, tol=1e-12)
     exact = exact_marginals(grid, table)
     certain = (grid == 0) | (grid == 1)
     np.testing.assert_array_equal(r.beliefs.probability[certain], grid[certain])  # exactly, not nearly
@@ -31,7 +37,7 @@ def test_issue_cases_match_exact_enumeration(grid, table, kernel, schedule, dtyp
 
 def test_clamped_cell_sends_its_states_message():
     # identity link, P = 1 at x = 0: the message east is the table's occupied column, normalised
-    r = infer(np.array([[1.0, 0.5]]), [[10, 1], [2, 10]], pairing="oriented", kernel="plain", tol=1e-12)
+    r = infer(np.array([[1.0, 0.5]]), [[10, 1], [2, 10]], pairing="oriented", schedule=Checkerboard(kernel="plain"), tol=1e-12)
     # oriented: a message travelling east uses hidden.T, rows = receiver: column N1 is (10, 1)
     assert r.messages[0, 0, 1] == pytest.approx(10 / 11, abs=1e-12)
 
@@ -48,7 +54,7 @@ def test_link_without_zero_never_makes_a_cell_certain():
 def test_link_with_a_zero_makes_only_that_side_certain():
     link = [[1.0, 0.5], [0.0, 0.5]]  # an observed "occupied" is certain, an observed "empty" is not
     states = certain_states(np.array([[1.0, 0.0, 0.5]]), link, directional_tables([[10, 1], [1, 10]]))
-    assert states.tolist() == [[1, FREE, FREE]]
+    assert states.tolist() == [[1, UNCERTAIN, UNCERTAIN]]
 
 
 def test_region_and_warm_start_keep_clamps():
@@ -57,8 +63,8 @@ def test_region_and_warm_start_keep_clamps():
     region = np.zeros(grid.shape, bool)
     region[:, 1:] = True
     for kernel in ("auto", "plain"):
-        first = infer(grid, [[100, 1], [1, 100]], region=region, kernel=kernel, max_iter=3)
-        again = infer(grid, [[100, 1], [1, 100]], region=region, kernel=kernel, messages=first.messages, tol=1e-12)
+        first = infer(grid, [[100, 1], [1, 100]], region=region, schedule=Checkerboard(kernel=kernel), max_iter=3)
+        again = infer(grid, [[100, 1], [1, 100]], region=region, schedule=Checkerboard(kernel=kernel), messages=first.messages, tol=1e-12)
         for r in (first, again):
             assert r.beliefs.probability[1, 1] == 0.0 and r.beliefs.probability[0, 1] == 1.0
 
@@ -67,7 +73,7 @@ def test_zero_entries_carry_certainty_on():
     # equality table: a certain end fixes the whole chain
     grid = np.array([[1.0, 0.5, 0.3, 0.9]])
     for kernel, schedule in RUNS:
-        r = infer(grid, [[1, 0], [0, 1]], kernel=kernel, schedule=schedule)
+        r = infer(grid, [[1, 0], [0, 1]], schedule=_schedule(schedule, kernel))
         assert r.beliefs.probability.tolist() == [[1.0, 1.0, 1.0, 1.0]]
     np.testing.assert_array_equal(exact_marginals(grid, [[1, 0], [0, 1]]), 1.0)
 
@@ -79,7 +85,7 @@ def test_zero_entries_carry_certainty_on():
 @pytest.mark.parametrize("kernel,schedule", RUNS)
 def test_contradictory_hard_evidence_is_an_error(grid, table, cell, kernel, schedule):
     with pytest.raises(InputError, match="contradictory hard evidence") as err:
-        infer(grid, table, kernel=kernel, schedule=schedule)
+        infer(grid, table, schedule=_schedule(schedule, kernel))
     assert f"at cell {cell}" in str(err.value) and str(err.value).startswith("grid:")
     with pytest.raises(InputError, match="contradictory"):
         exact_marginals(grid, table)
@@ -90,7 +96,7 @@ def test_certain_state_with_an_all_zero_column_is_an_error():
     grid, table = np.array([[0.5, 1.0]]), [[0, 1], [0, 1]]
     for kernel in ("auto", "plain"):
         with pytest.raises(InputError, match=r"\(x=1, y=0\).*impossible next to its neighbours"):
-            infer(grid, table, pairing="oriented", kernel=kernel)
+            infer(grid, table, pairing="oriented", schedule=Checkerboard(kernel=kernel))
     with pytest.raises(InputError, match="contradictory"):
         exact_marginals(grid, table, pairing="oriented")
     # the same cell at the west end is possible (it only forces its east neighbour empty)
@@ -101,7 +107,7 @@ def test_certain_state_with_an_all_zero_column_is_an_error():
 @pytest.mark.parametrize("kernel", ["auto", "plain"])
 def test_no_iteration_sends_nothing_but_certain_beliefs_are_exact(kernel):
     grid = np.array([[1.0, 0.3, 0.0, 0.6]])
-    r = infer(grid, [[10, 1], [1, 10]], max_iter=0, kernel=kernel)
+    r = infer(grid, [[10, 1], [1, 10]], max_iter=0, schedule=Checkerboard(kernel=kernel))
     assert r.iterations == 0
     np.testing.assert_allclose(r.beliefs.probability, grid, atol=1e-12)
     assert r.beliefs.probability[0, 0] == 1.0 and r.beliefs.probability[0, 2] == 0.0

@@ -2,11 +2,12 @@
 import numpy as np
 import pytest
 
-import crfmap.crf.packed as F
+import crfmap.crf.engine.packed as F
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.crf.lbp import MESSAGE_FLOOR, infer
-from crfmap.crf.potentials import directional_tables
+from crfmap.crf.engine.messages import MESSAGE_FLOOR
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.potentials import directional_tables
 
 RNG = np.random.default_rng(13)
 TABLES = [
@@ -109,7 +110,7 @@ def test_certain_cells_found_while_packing_are_clamped_as_on_the_general_path():
 def test_observation_odds_are_the_floored_probability_as_odds(link):
     """One division (occ / emp) gives the odds of the floored P(occupied) = occ / (occ + emp) (the earlier form;
     at the floor that form loses digits in 1 - u, hence 1e-9)."""
-    from crfmap.crf._packing import unary_odds
+    from crfmap.crf.engine._layout import unary_odds
 
     lk = np.asarray(link, np.float64).ravel()
     for p in np.concatenate([[0.0, 1.0, 0.5, 1e-9, 1 - 1e-9], RNG.uniform(0, 1, 200)]):

@@ -3,8 +3,12 @@ import numpy as np
 import pytest
 
 from crfmap.errors import InputError
-from crfmap.crf.exact import exact_marginals
-from crfmap.crf.lbp import SCHEDULES, disc_region, infer, initial_messages, message
+from crfmap.crf.inference.schedules import Flooding
+from crfmap.crf.inference.exact import exact_marginals
+from crfmap.crf.engine.messages import initial_messages
+from crfmap.crf.inference.lbp import infer, message
+from crfmap.crf.inference.regions import disc_region
+from crfmap.crf.inference.schedules import SCHEDULES
 from crfmap.grid import OccupancyGrid
 
 from naive import naive_flooding
@@ -86,8 +90,8 @@ def test_flooding_matches_naive_reference_iteration_by_iteration(pairing, iterat
     obs = RNG.uniform(0.0, 1.0, (3, 4))
     hidden = [[3.0, 0.7], [1.3, 2.5]]
     link = [[1.1, 0.1], [0.2, 1.3]]
-    r = infer(obs, hidden, link, schedule="flooding", max_iter=iterations, tol=0.0,
-              pairing=pairing, damping=0.3)
+    r = infer(obs, hidden, link, schedule=Flooding(damping=0.3), max_iter=iterations, tol=0.0,
+              pairing=pairing)
     ref = naive_flooding(obs, hidden, link, iterations, pairing=pairing, damping=0.3)
     np.testing.assert_allclose(r.beliefs.probability, ref, atol=1e-12)
 
@@ -194,7 +198,7 @@ def test_damped_flooding_converges_to_the_checkerboard_fixed_point():
     obs = RNG.uniform(0.05, 0.95, (40, 40))
     hidden = [[3.0, 1.0], [1.0, 3.0]]
     a = infer(obs, hidden, schedule="checkerboard", tol=1e-10)
-    b = infer(obs, hidden, schedule="flooding", damping=0.5, tol=1e-10, max_iter=5000)
+    b = infer(obs, hidden, schedule=Flooding(damping=0.5), tol=1e-10, max_iter=5000)
     assert a.converged and b.converged
     np.testing.assert_allclose(a.beliefs.probability, b.beliefs.probability, atol=1e-6)
 
@@ -205,7 +209,7 @@ def test_damped_flooding_converges_to_the_checkerboard_fixed_point():
     ({"link": [[1, 0]]}, "2x2"),
     ({"hidden": "1,2,3"}, "4 comma"),
     ({"schedule": "random"}, "schedule"),
-    ({"damping": 1.0}, "damping"),
+    ({"schedule": Flooding}, "schedule"),
     ({"region": np.ones((2, 2), bool)}, "region"),
     ({"messages": np.full((4, 2, 2), 0.5)}, "messages"),
     ({"pairing": "sideways"}, "pairing"),

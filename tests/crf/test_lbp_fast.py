@@ -2,11 +2,14 @@
 import numpy as np
 import pytest
 
-import crfmap.crf.packed as F
+import crfmap.crf.engine.packed as F
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.crf.lbp import MESSAGE_FLOOR, disc_region, infer
-from crfmap.crf.potentials import directional_tables
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.engine.messages import MESSAGE_FLOOR
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.regions import disc_region
+from crfmap.crf.model.potentials import directional_tables
 
 RNG = np.random.default_rng(2024)
 TABLES = [
@@ -16,6 +19,7 @@ TABLES = [
     ([[1.0, 0.0], [0.0, 1.0]], "receiver"),  # hard table: messages hit the floor
 ]
 LINK = [[1.1, 0.1], [0.2, 1.3]]
+PLAIN, FAST = Checkerboard(kernel="plain"), Checkerboard(kernel="fast")
 
 
 def packed_run(obs, hidden, pairing, passes, threads=2, dtype=np.float64):
@@ -34,7 +38,7 @@ def test_fast_iterations_equal_plain_iterations(shape, hidden, pairing):
     """k fast iterations, however split into blocks, give the plain kernel's k iterations."""
     obs = RNG.uniform(0.0, 1.0, shape)
     obs[0, 0], obs[-1, -1] = 0.0, 1.0  # hard evidence too
-    plain = infer(obs, hidden, LINK, pairing=pairing, max_iter=8, tol=0.0, kernel="plain")
+    plain = infer(obs, hidden, LINK, pairing=pairing, max_iter=8, tol=0.0, schedule=PLAIN)
     for passes in ([1] * 8, [8], [3, 5]):
         beliefs, messages, changes = packed_run(obs, hidden, pairing, passes)
         np.testing.assert_allclose(beliefs, plain.beliefs.probability, atol=1e-9)
@@ -53,7 +57,7 @@ def test_blocked_pass_uses_several_bands_and_equals_plain():
     assert np.all(edges[1:-1] % F.TILE_ROWS == 0)
     assert np.all(np.diff(edges) >= 4 * 6 + 2 * F.TILE_ROWS + 4)
     beliefs, messages, changes = packed_run(obs, [[4.0, 1.0], [1.0, 4.0]], "receiver", [6, 6])
-    plain = infer(obs, [[4.0, 1.0], [1.0, 4.0]], LINK, max_iter=12, tol=0.0, kernel="plain")
+    plain = infer(obs, [[4.0, 1.0], [1.0, 4.0]], LINK, max_iter=12, tol=0.0, schedule=PLAIN)
     np.testing.assert_allclose(beliefs, plain.beliefs.probability, atol=1e-10)
     np.testing.assert_allclose(changes[[5, 11]], plain.max_change[[5, 11]], atol=1e-10)
 
@@ -68,10 +72,10 @@ def test_float32_close_to_float64():
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_infer_fast_equals_plain_bounded_with_warm_start(dtype):
     grid = OccupancyGrid(RNG.uniform(0.1, 0.9, (60, 80)), resolution=0.5)
-    start = infer(grid, max_iter=3, tol=0.0, kernel="plain").messages
+    start = infer(grid, max_iter=3, tol=0.0, schedule=PLAIN).messages
     region = disc_region(grid, (17.0, 12.0), 6.0)
-    plain = infer(grid, region=region, messages=start, max_iter=9, tol=0.0, kernel="plain", dtype=dtype)
-    fast = infer(grid, region=region, messages=start, max_iter=9, tol=0.0, kernel="fast", dtype=dtype)
+    plain = infer(grid, region=region, messages=start, max_iter=9, tol=0.0, schedule=PLAIN, dtype=dtype)
+    fast = infer(grid, region=region, messages=start, max_iter=9, tol=0.0, schedule=FAST, dtype=dtype)
     assert fast.kernel == "fast" and plain.kernel == "plain"
     atol = 1e-10 if dtype == np.float64 else 1e-5
     np.testing.assert_allclose(fast.beliefs.probability, plain.beliefs.probability, atol=atol)
@@ -87,7 +91,7 @@ def test_infer_fast_equals_plain_bounded_with_warm_start(dtype):
 
 def test_converged_beliefs_are_the_plain_fixed_point():
     obs = RNG.uniform(0.05, 0.95, (90, 70))
-    plain = infer(obs, [[3.0, 1.0], [1.0, 3.0]], tol=1e-9, kernel="plain")
+    plain = infer(obs, [[3.0, 1.0], [1.0, 3.0]], tol=1e-9, schedule=PLAIN)
     fast = infer(obs, [[3.0, 1.0], [1.0, 3.0]], tol=1e-9)
     assert fast.kernel == "fast" and fast.converged and plain.converged
     assert fast.iterations >= plain.iterations  # measured at block ends only
@@ -115,7 +119,7 @@ def test_freezing_exactly_settled_tiles_changes_nothing(small_tiles):
     obs = settling_grid()
     h, w = obs.shape
     n = 120
-    plain = infer(obs, max_iter=n, tol=0.0, kernel="plain")
+    plain = infer(obs, max_iter=n, tol=0.0, schedule=PLAIN)
     block = F.PackedBlock(h, w, np.float64, directional_tables([[10.0, 1.0], [1.0, 10.0]]), MESSAGE_FLOOR)
     block.set_unary(obs, np.eye(2))
     changes = block.run(n, 0.0, threads=2, block=8, freeze=0.0)
@@ -126,9 +130,9 @@ def test_freezing_exactly_settled_tiles_changes_nothing(small_tiles):
 
 def test_freezing_converges_to_the_plain_fixed_point(small_tiles):
     obs = settling_grid()
-    plain = infer(obs, tol=1e-6, kernel="plain", max_iter=3000)
-    fast = infer(obs, tol=1e-6, freeze=1e-8, max_iter=3000)
-    exact = infer(obs, tol=1e-6, freeze=0.0, max_iter=3000)
+    plain = infer(obs, tol=1e-6, schedule=PLAIN, max_iter=3000)
+    fast = infer(obs, tol=1e-6, schedule=Checkerboard(freeze=1e-8), max_iter=3000)
+    exact = infer(obs, tol=1e-6, schedule=Checkerboard(freeze=0.0), max_iter=3000)
     assert plain.converged and fast.converged and exact.converged
     assert fast.max_change[-1] < 1e-6  # decided by an iteration of every cell
     assert np.abs(fast.beliefs.probability - plain.beliefs.probability).max() < 1e-5
@@ -174,12 +178,12 @@ def test_warm_start_from_converged_stops_at_once():
 
 def test_blocks_measure_their_last_iteration_and_grow_after_a_warm_start():
     obs = RNG.uniform(0.1, 0.9, (50, 60))
-    r = infer(obs, max_iter=20, tol=0.0, block=8)
+    r = infer(obs, max_iter=20, tol=0.0, schedule=Checkerboard(block=8))
     assert r.iterations == 20 and r.max_change.shape == (20,)
     # from uniform messages: blocks of 8, 8 and the 4 left
     assert np.flatnonzero(np.isfinite(r.max_change)).tolist() == [7, 15, 19]
     # warm start: blocks of 1, 2, 4, 8 and the 5 left, measured at iterations 1, 3, 7, 15, 20
-    w = infer(obs, max_iter=20, tol=0.0, block=8, messages=r.messages)
+    w = infer(obs, max_iter=20, tol=0.0, schedule=Checkerboard(block=8), messages=r.messages)
     assert np.flatnonzero(np.isfinite(w.max_change)).tolist() == [0, 2, 6, 14, 19]
 
 
@@ -199,14 +203,14 @@ def test_bad_fast_arguments_are_named(kwargs, word):
 def test_flooding_and_damping_still_run_on_the_plain_kernels():
     obs = RNG.uniform(0.1, 0.9, (8, 9))
     assert infer(obs, schedule="flooding", max_iter=3).kernel == "plain"
-    assert infer(obs, damping=0.3, max_iter=3).kernel == "plain"
+    assert infer(obs, schedule=Checkerboard(damping=0.3), max_iter=3).kernel == "plain"
     assert infer(obs, max_iter=3).kernel == "fast"
 
 
 def test_timings_and_messages_unpacked_on_first_read():
     obs = np.random.default_rng(5).uniform(0.1, 0.9, (33, 47))
-    fast = infer(obs, max_iter=12, tol=0.0, kernel="fast")
-    plain = infer(obs, max_iter=12, tol=0.0, kernel="plain")
+    fast = infer(obs, max_iter=12, tol=0.0, schedule=FAST)
+    plain = infer(obs, max_iter=12, tol=0.0, schedule=PLAIN)
     assert set(fast.timings) == {"pack", "iterate", "unpack"} and all(v >= 0 for v in fast.timings.values())
     assert plain.timings == {}
     assert callable(fast.__dict__["_messages"])  # not unpacked yet

@@ -1,11 +1,12 @@
-"""The coarse-to-fine start (crfmap.crf.multiscale, infer(init="coarse")) against the uniform start."""
+"""The coarse-to-fine start (crfmap.crf.inference.multiscale, infer(init="coarse")) against the uniform start."""
 import numpy as np
 import pytest
 
 from crfmap.bench.common import bench_grid
-from crfmap.crf import multiscale
-from crfmap.crf.lbp import infer
-from crfmap.crf.presets import coupling_table
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.inference import multiscale
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.presets import coupling_table
 from crfmap.errors import InputError
 
 RNG = np.random.default_rng(7)
@@ -38,7 +39,7 @@ def test_single_fixed_point_coarse_start_gives_the_uniform_start_beliefs(hidden,
     assert "coarse" in coarse.timings and coarse.seconds >= coarse.timings["coarse"]
     np.testing.assert_allclose(coarse.beliefs.probability, plain.beliefs.probability, atol=1e-4)
     # and the plain kernels agree (the option is a warm start, whatever the kernel)
-    plain_kernel = infer(obs, hidden, tol=1e-7, max_iter=5000, init="coarse", kernel="plain")
+    plain_kernel = infer(obs, hidden, tol=1e-7, max_iter=5000, init="coarse", schedule=Checkerboard(kernel="plain"))
     np.testing.assert_allclose(plain_kernel.beliefs.probability, plain.beliefs.probability, atol=1e-4)
 
 

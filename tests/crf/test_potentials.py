@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from crfmap.errors import InputError
-from crfmap.crf.potentials import check_table, directional_tables, link_unary, message_coefficients
+from crfmap.crf.model.potentials import check_table, directional_tables, link_unary, message_coefficients
 
 
 def test_table_parsing_and_scale():

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from crfmap.crf.lbp import infer
-from crfmap.crf.presets import CRITICAL_COUPLING, PRESETS, evidence_from_probability, get_preset
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.presets import CRITICAL_COUPLING, evidence_from_probability, get_preset, PRESETS
 from crfmap.errors import InputError
 
 

@@ -16,8 +16,9 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from crfmap.crf.exact import exact_marginals
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.inference.exact import exact_marginals
+from crfmap.crf.inference.lbp import infer
 from crfmap.errors import InputError
 
 # derandomize: the same examples on every run (CI must not find a new one by chance; a search for new
@@ -28,6 +29,11 @@ RUNS = [("auto", "checkerboard"), ("plain", "checkerboard"), ("plain", "flooding
 
 evidence = st.one_of(st.sampled_from([0.0, 1.0]), st.floats(1e-3, 1 - 1e-3))
 entry = st.one_of(st.just(0.0), st.floats(0.1, 100.0))
+
+
+def _schedule(schedule, kernel):
+    """The settings of ``schedule`` on ``kernel`` (a choice of the checkerboard schedule only)."""
+    return Checkerboard(kernel=kernel) if schedule == "checkerboard" else schedule
 
 
 @st.composite
@@ -63,9 +69,9 @@ def test_chains_are_exact(grid, tp, run, dtype, vertical):
     kernel, schedule = run
     if exact is None:
         with pytest.raises(InputError, match="contradictory"):
-            infer(grid, table, pairing=pairing, kernel=kernel, schedule=schedule, dtype=dtype)
+            infer(grid, table, pairing=pairing, schedule=_schedule(schedule, kernel), dtype=dtype)
         return
-    r = infer(grid, table, pairing=pairing, kernel=kernel, schedule=schedule, dtype=dtype, max_iter=200, tol=1e-10)
+    r = infer(grid, table, pairing=pairing, schedule=_schedule(schedule, kernel), dtype=dtype, max_iter=200, tol=1e-10)
     p = r.beliefs.probability
     assert np.all(np.isfinite(p))
     hard = (exact == 0) | (exact == 1)
@@ -86,7 +92,7 @@ def test_weakly_coupled_loopy_grids(shape, data, run, dtype):
     oo, oe, ee = (data.draw(st.floats(1.0, 2.0)) for _ in range(3))
     table = [[oo, oe], [oe, ee]]
     kernel, schedule = run
-    r = infer(grid, table, kernel=kernel, schedule=schedule, dtype=dtype, max_iter=2000, tol=1e-10)
+    r = infer(grid, table, schedule=_schedule(schedule, kernel), dtype=dtype, max_iter=2000, tol=1e-10)
     exact = exact_marginals(grid, table)
     hard = (grid == 0) | (grid == 1)
     np.testing.assert_array_equal(r.beliefs.probability[hard], grid[hard])
@@ -102,7 +108,7 @@ def test_clamped_cells_are_exact_on_loopy_grids(shape, data, tp, run):
     table, pairing = tp
     kernel, schedule = run
     try:
-        r = infer(grid, table, pairing=pairing, kernel=kernel, schedule=schedule, max_iter=50)
+        r = infer(grid, table, pairing=pairing, schedule=_schedule(schedule, kernel), max_iter=50)
     except InputError as err:  # arc consistency is sound: the exact joint must have no positive state either
         assert "contradictory" in str(err)
         assert _exact_or_error(grid, table, pairing) is None

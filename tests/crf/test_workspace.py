@@ -1,8 +1,9 @@
-"""infer's reusable buffers (crfmap.crf.workspace): reused only when free, never changing a result."""
+"""infer's reusable buffers (crfmap.crf.engine.workspace): reused only when free, never changing a result."""
 import numpy as np
 
-from crfmap.crf import workspace
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.schedules import Checkerboard
+from crfmap.crf.engine import workspace
+from crfmap.crf.inference.lbp import infer
 
 RNG = np.random.default_rng(13)
 
@@ -34,7 +35,7 @@ def test_results_of_successive_calls_do_not_share_or_change_buffers():
     second = infer(obs[::-1].copy(), max_iter=5, tol=0.0, dtype=np.float64)  # first still held: new buffers
     assert not np.shares_memory(first.beliefs.probability, second.beliefs.probability)
     np.testing.assert_array_equal(first.beliefs.probability, kept_beliefs)
-    plain = infer(obs, max_iter=5, tol=0.0, dtype=np.float64, kernel="plain")
+    plain = infer(obs, max_iter=5, tol=0.0, dtype=np.float64, schedule=Checkerboard(kernel="plain"))
     np.testing.assert_allclose(first.messages, plain.messages, atol=1e-9)  # unpacked after the second call
     del first, second
     again = infer(obs, max_iter=5, tol=0.0, dtype=np.float64)  # reuses the dropped buffers

@@ -4,7 +4,7 @@ import pytest
 
 from crfmap.experiments import explorer
 from crfmap.errors import InputError
-from crfmap.crf.lbp import MESSAGE_FLOOR
+from crfmap.crf.engine.messages import MESSAGE_FLOOR
 from crfmap.assess.metrics import mse
 
 

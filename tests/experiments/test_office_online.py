@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from crfmap.crf.lbp import infer
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.experiments.office_online import (default_table_drift, map_online, near_versus_offline, online_numbers,
                                              versus_offline)
 from crfmap.grid import UNKNOWN

@@ -6,7 +6,7 @@ from crfmap.experiments import pipeline as experiment; from crfmap.assess import
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.assess.learning import learn_thesis, lbp_mse
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.sim.simulator import Laser
 
 

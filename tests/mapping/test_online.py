@@ -4,7 +4,7 @@ import pytest
 
 from crfmap.mapping import builder; from crfmap import paths
 from crfmap.errors import InputError
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.lbp import infer
 from crfmap.mapping.online import OnlineMapper
 from crfmap.recording import ScanSet
 

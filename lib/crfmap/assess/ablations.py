@@ -37,7 +37,7 @@ PROBABILITY_FLOOR = 1e-6  # logit(P_raw) of P = 0 or 1 (never from counts, which
 
 def ablation_presets(base: str = "certainty") -> dict:
     """{name: Preset}: the ``base`` preset and its ablations (see the module docstring)."""
-    from crfmap.crf.presets import coupling_table, get_preset
+    from crfmap.crf.model.presets import coupling_table, get_preset
 
     p = get_preset(base)
     return {base: p, "J = 0": replace(p, hidden=coupling_table(0.0)), "no margin": replace(p, margin=None),

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.errors import InputError
+from crfmap.assess.graph_cut import graph_cut_map
 from crfmap.grid import UNKNOWN
 
 
@@ -78,8 +79,6 @@ def graph_cut(observation, hidden, region=None) -> np.ndarray:
     >>> graph_cut(np.array([[0.9, 0.45, 0.9]]), [[10, 1], [1, 10]]).tolist()
     [[1.0, 1.0, 1.0]]
     """
-    from crfmap.bench.external import graph_cut_map
-
     u = _check(observation)
     labels, _ = graph_cut_map(u, hidden, np.eye(2))
     out = np.asarray(labels, dtype=np.float64)
@@ -98,7 +97,7 @@ def all_baselines(split, thesis_max_iter: int = 1000, names=BASELINES) -> dict:
     ``median3x3``, ``closing3x3``, ``thesis`` (LBP with the thesis's tables on the raw grid) and
     ``graphcut`` (the MAP labelling of the thesis's CRF).
     """
-    from crfmap.crf.presets import get_preset
+    from crfmap.crf.model.presets import get_preset
 
     unknown = [n for n in names if n not in BASELINES]
     if unknown:

@@ -13,7 +13,7 @@ with the held-out cell's own label in the map (occupied if P > 0.5). The thesis 
   a harder test, which asks for whole patches (a piece of wall, a doorway) to be filled in.
 
 Predictors take ``(masked_grid, held_out_mask)`` and return the predicted grid (an
-:class:`~crfmap.grid.OccupancyGrid`, an array, or an :class:`~crfmap.crf.lbp.LBPResult`):
+:class:`~crfmap.grid.OccupancyGrid`, an array, or an :class:`~crfmap.crf.inference.result.LBPResult`):
 :func:`lbp_predictor` (the CRF) and :func:`neighbour_predictor` (the baseline: the mean P of the
 known cells around a held-out cell). Precision, recall and accuracy skip predictions of exactly
 0.5, as everywhere in :mod:`crfmap.assess.metrics`; :attr:`CrossValidation.coverage` says how many that left.
@@ -37,16 +37,10 @@ import numpy as np
 
 from crfmap.checks import check_int
 from crfmap.errors import InputError
-from crfmap.grid import UNKNOWN, OccupancyGrid, check_probability_array
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.grid import UNKNOWN, OccupancyGrid, as_grid, check_probability_array
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 
 NOT_IN_A_FOLD = -1  # fold id of cells that are never held out (unknown cells)
-
-
-def _as_grid(grid, name="grid") -> OccupancyGrid:
-    if isinstance(grid, OccupancyGrid):
-        return grid
-    return OccupancyGrid(check_probability_array(grid, name))
 
 
 def _mask(mask, name="mask") -> np.ndarray:
@@ -130,7 +124,7 @@ def neighbour_mean(grid, radius=1) -> OccupancyGrid:
     >>> neighbour_mean(np.array([[0.9, 0.5, 0.1, 0.2]]), 1).probability.round(2).tolist()
     [[0.5, 0.5, 0.2, 0.1]]
     """
-    g = _as_grid(grid)
+    g = as_grid(grid)
     if isinstance(radius, bool) or not isinstance(radius, (int, np.integer)) or radius < 1:
         raise InputError("radius", f"need a whole number of cells >= 1, got {radius!r}")
     p = g.probability
@@ -153,15 +147,16 @@ def neighbour_predictor(radius=1):
 
 
 def lbp_predictor(hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, margin=3, **options):
-    """The CRF predictor for :func:`cross_validate`: :func:`crfmap.crf.lbp.infer` on the masked grid.
+    """The CRF predictor for :func:`cross_validate`: :func:`crfmap.crf.inference.lbp.infer` on the masked grid.
 
     LBP runs on the cells within ``margin`` cells of a known cell of the masked grid plus the
-    held-out cells (:func:`crfmap.crf.lbp.near_known`): the never-observed outside of a real map
+    held-out cells (:func:`crfmap.crf.inference.regions.near_known`): the never-observed outside of a real map
     then stays out of it (under the default coupling LBP would fill it with the state of its
-    border). ``margin=None`` runs on the whole grid. ``options`` go to :func:`~crfmap.crf.lbp.infer`
+    border). ``margin=None`` runs on the whole grid. ``options`` go to :func:`~crfmap.crf.inference.lbp.infer`
     (``schedule``, ``max_iter``, ``tol``, ...).
     """
-    from crfmap.crf.lbp import infer, near_known
+    from crfmap.crf.inference.lbp import infer
+    from crfmap.crf.inference.regions import near_known
 
     if margin is not None and not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool)
                                    and margin >= 0):
@@ -257,7 +252,7 @@ def cross_validate(grid, folds, predict, run=None, progress=True) -> CrossValida
     """
     from tqdm.auto import tqdm
 
-    g = _as_grid(grid)
+    g = as_grid(grid)
     f = np.asarray(folds)
     if f.shape != g.shape or not np.issubdtype(f.dtype, np.integer):
         raise InputError("folds", f"expected an integer array of the grid's shape {g.shape}, got {f.dtype} {f.shape}")
@@ -314,7 +309,7 @@ def leave_one_out(grid, cells, predict, window=20, progress=False) -> np.ndarray
     """
     from tqdm.auto import tqdm
 
-    g = _as_grid(grid)
+    g = as_grid(grid)
     c = np.asarray(cells)
     if c.ndim != 2 or c.shape[1] != 2 or not np.issubdtype(c.dtype, np.integer):
         raise InputError("cells", f"expected an (n, 2) integer array of (x, y) cells, got {c.dtype} {c.shape}")

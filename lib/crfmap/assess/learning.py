@@ -29,9 +29,9 @@ import numpy as np
 
 from crfmap.checks import check_pair
 from crfmap.errors import InputError
-from crfmap.crf.lbp import infer
+from crfmap.crf.inference.lbp import infer
 from crfmap.assess.metrics import mse
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
+from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 
 ENTRY_NAMES = ("hidden oo", "hidden oe", "hidden eo", "hidden ee", "link oo", "link oe", "link eo", "link ee")
 
@@ -83,7 +83,7 @@ def learn_thesis(
     hidden, link : starting tables (the defaults, as in the thesis)
     alpha : step (the thesis's 0.01); ``min_alpha`` < alpha lets it halve the step when stuck
     max_rounds : rounds over the 8 entries at most
-    lbp_options : keyword arguments for :func:`crfmap.crf.lbp.infer` (e.g. the thesis's
+    lbp_options : keyword arguments for :func:`crfmap.crf.inference.lbp.infer` (e.g. the thesis's
         ``{"schedule": "thesis", "max_iter": 2}``)
 
     Returns

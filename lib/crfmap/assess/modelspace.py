@@ -23,7 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 from crfmap.assess.scansplit import score
-from crfmap.crf.presets import coupling_table, get_preset
+from crfmap.crf.model.presets import coupling_table, get_preset
 
 
 def _near(split, margin):
@@ -34,10 +34,10 @@ def _near(split, margin):
 def table_refine(split, coupling, link_strength, margin=None, max_iter=1000, tol=1e-5, dtype=np.float64):
     """(beliefs, LBPResult) of the raw grid with symmetric tables of coupling J and link strength K.
 
-    ``tol`` and ``dtype`` go to :func:`crfmap.crf.lbp.infer` (float32 moves half the bytes; its
+    ``tol`` and ``dtype`` go to :func:`crfmap.crf.inference.lbp.infer` (float32 moves half the bytes; its
     beliefs differ from float64's by about 1e-6).
     """
-    from crfmap.crf.lbp import infer
+    from crfmap.crf.inference.lbp import infer
 
     raw = split.raw_probability()
     region = _near(split, margin)

@@ -1,6 +1,6 @@
 """The search that chooses the certainty preset's constants: a coordinate search on one recording.
 
-The certainty preset (:mod:`crfmap.crf.presets`) has seven constants: the hidden coupling J, the
+The certainty preset (:mod:`crfmap.crf.model.presets`) has seven constants: the hidden coupling J, the
 log-odds of the first net hit and of each further one ``(a, b)``, the same for net passes
 ``(c, d)``, the cap ``limit`` on one cell's |log-odds| and the LBP ``margin``. They are chosen by
 the scan-split Brier score (all cells the second half observed; :mod:`crfmap.assess.scansplit`)
@@ -57,9 +57,9 @@ START = {"coupling": 0.3, "occupied_first": 1.0, "occupied_further": 0.2, "free_
 
 
 def preset_constants(preset) -> dict:
-    """The seven searched constants of a :class:`~crfmap.crf.presets.Preset`, named as in :data:`GRID`.
+    """The seven searched constants of a :class:`~crfmap.crf.model.presets.Preset`, named as in :data:`GRID`.
 
-    >>> from crfmap.crf.presets import get_preset
+    >>> from crfmap.crf.model.presets import get_preset
     >>> preset_constants(get_preset("certainty"))["margin"]
     5
     """
@@ -70,7 +70,7 @@ def preset_constants(preset) -> dict:
 
 def preset_from(constants: dict, base: str = "certainty"):
     """The ``base`` preset with the constants of ``constants`` (names of :data:`GRID`)."""
-    from crfmap.crf.presets import coupling_table, get_preset
+    from crfmap.crf.model.presets import coupling_table, get_preset
 
     unknown = set(constants) - set(GRID)
     if unknown:

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
@@ -317,7 +318,7 @@ def _interval(values, alpha):
     return (float(np.quantile(v, alpha)), float(np.quantile(v, 1 - alpha)))
 
 
-def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, block: int = DEFAULT_BLOCK,
+def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, block: int = DEFAULT_BLOCK,
             seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None) -> dict:
     """Score the baselines (:func:`crfmap.assess.baselines.all_baselines`), ``preset`` and peers on a split.
 
@@ -331,7 +332,6 @@ def compare(split: ScanSplit, preset: str = "certainty", n_boot: int = 200, bloc
     """
     from crfmap.assess.baselines import BASELINES, all_baselines
     from crfmap.assess.peers import PEERS, peer_rows
-    from crfmap.crf.presets import get_preset
 
     wanted = list(BASELINES) + [preset] if methods is None else list(methods)
     unknown = [m for m in wanted if m not in BASELINES and m not in PEERS and m != preset]

@@ -7,18 +7,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from crfmap.crf import packed as F
-from crfmap.crf.lbp import MESSAGE_FLOOR
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables, link_unary
+from crfmap.crf.engine import packed as F
+from crfmap.crf.engine.messages import MESSAGE_FLOOR
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables, link_unary
 
 
 class NumpyCheckerboard:
     """THE BASELINE: checkerboard LBP in vectorised NumPy, one odds ratio per message.
 
-    Same model, schedule and floors as :func:`crfmap.crf.lbp.infer` (cells with even x + y send,
+    Same model, schedule and floors as :func:`crfmap.crf.inference.lbp.infer` (cells with even x + y send,
     then the others); each half-sweep is four strided sub-lattices (even/odd rows) updated
     with whole-array operations: ``r' = (t00 R + t01) / (t10 R + t11)`` with R the sender's
-    cavity odds. Messages are ``m[d, y, x]`` as in :mod:`crfmap.crf._lbp_kernels`, as odds.
+    cavity odds. Messages are ``m[d, y, x]`` as in :mod:`crfmap.crf.inference._plain_kernels`, as odds.
 
     A good NumPy implementation: float32, no Python loop over cells, chunks of about
     CHUNK_CELLS cells of a sub-lattice at a time so the temporaries stay in cache.

@@ -4,7 +4,7 @@ Neither is a dependency of crfmap; the rows run only when the library imports. B
 model :mod:`crfmap.bench.suite` times: a binary hidden lattice, 4-neighbour edges with the table
 ``DEFAULT_HIDDEN`` ([[10, 1], [1, 10]], state 0 = occupied), each cell's unary
 ``link_unary(observed, DEFAULT_LINK)`` floored to [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR] as
-:func:`crfmap.crf.lbp.infer` does, on ``bench_grid(size)``.
+:func:`crfmap.crf.inference.lbp.infer` does, on ``bench_grid(size)``.
 
 - ``pgmax-bp``: PGMax's belief propagation (JAX, CPU, float32, synchronous "flooding"
   schedule, ``temperature=1`` = sum-product). Timed with damping 0.5; ``pgmax-compile`` is the
@@ -39,10 +39,12 @@ import warnings
 
 import numpy as np
 
+from crfmap.assess.graph_cut import crf_energy, floored_unary, graph_cut_map
 from crfmap.bench.common import median_time, bench_grid, record
-from crfmap.errors import InputError
-from crfmap.crf.lbp import MESSAGE_FLOOR, infer
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table, link_unary
+from crfmap.crf.engine.messages import MESSAGE_FLOOR
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.schedules import Flooding
+from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 
 LIBRARIES = {"pgmax": "pgmax", "pymaxflow": "maxflow"}  # name in records -> module
 INSTALL = {"pgmax": "pip install 'jax<0.8' 'jaxlib<0.8' && pip install --no-deps pgmax",
@@ -76,84 +78,6 @@ def _dist_version(name):
     from importlib.metadata import version
 
     return version({"pymaxflow": "PyMaxflow"}.get(name, name))
-
-
-def _unary(observed, link=DEFAULT_LINK):
-    """P(occupied) each hidden cell gets from its observation, floored as crfmap.crf.lbp.infer floors it."""
-    return np.clip(link_unary(observed, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR)
-
-
-# --- CRF energy (shared by the graph cut and the tests) -----------------------------------------------
-
-
-def crf_energy(occupied, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK) -> float:
-    """-log of the unnormalised CRF probability of a labelling (``occupied[y, x]`` boolean).
-
-    Unary -log u or -log(1 - u) per cell, -log hidden[s_a, s_b] per 4-neighbour edge with
-    s = 0 for occupied, 1 for free (the thesis layout; oriented pairing, a = west / south).
-
-    >>> round(crf_energy(np.array([[True, True]]), np.array([[0.5, 0.5]])), 4)  # 2 log 2 - log 10
-    -0.9163
-    """
-    occupied = np.asarray(occupied, bool)
-    u = _unary(observed, link)
-    if occupied.shape != u.shape:
-        raise InputError("occupied", f"shape {occupied.shape} does not match the grid {u.shape}")
-    cost = -np.log(check_table(hidden, "hidden"))
-    s = np.where(occupied, 0, 1)
-    unary = np.where(occupied, -np.log(u), -np.log1p(-u)).sum()
-    pairwise = cost[s[:, :-1], s[:, 1:]].sum() + cost[s[:-1, :], s[1:, :]].sum()
-    return float(unary + pairwise)
-
-
-# --- PyMaxflow: exact MAP by a graph cut ------------------------------------------------------------
-
-
-def potts_weight(hidden=DEFAULT_HIDDEN) -> tuple:
-    """(w, shift, constant) so that -log hidden[s_a, s_b] = constant + shift * (x_a + x_b) + w [x_a != x_b].
-
-    x = 1 for occupied. Needs a symmetric table with positive entries; w >= 0 (attractive) makes
-    the energy submodular, so a graph cut finds the exact minimum.
-
-    >>> [round(v, 4) for v in potts_weight([[10, 1], [1, 10]])]  # log 10, 0, -log 10
-    [2.3026, 0.0, -2.3026]
-    """
-    t = check_table(hidden, "hidden")
-    if t[0, 1] != t[1, 0] or np.any(t <= 0):
-        raise InputError("hidden", f"the graph cut needs a symmetric table with positive entries, got {t.tolist()}")
-    occ, mixed, free = -np.log(t[0, 0]), -np.log(t[0, 1]), -np.log(t[1, 1])
-    w = mixed - 0.5 * (occ + free)
-    if w < 0:
-        raise InputError("hidden", f"not attractive (t01^2 > t00 t11): the energy is not submodular, {t.tolist()}")
-    return float(w), float(0.5 * (occ - free)), float(free)
-
-
-def graph_cut_map(observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK) -> tuple:
-    """Exact MAP labelling with PyMaxflow: (occupied[y, x] bool, energy from the flow).
-
-    Sink side = occupied: a cell on the sink side pays its source capacity (its occupied cost).
-    """
-    import maxflow
-
-    u = _unary(observed, link)
-    h, w = u.shape
-    weight, shift, constant = potts_weight(hidden)
-    degree = np.full((h, w), 4.0)
-    degree[0, :] -= 1
-    degree[-1, :] -= 1
-    degree[:, 0] -= 1
-    degree[:, -1] -= 1
-    cost_occ = -np.log(u) + shift * degree
-    cost_free = -np.log1p(-u)
-    low = np.minimum(cost_occ, cost_free)  # capacities must be >= 0
-    g = maxflow.Graph[float]()
-    nodes = g.add_grid_nodes((h, w))
-    right_and_up = np.array([[0, 0, 0], [0, 0, 1], [0, 1, 0]])  # each edge once, then both ways
-    g.add_grid_edges(nodes, weights=weight, structure=right_and_up, symmetric=True)
-    g.add_grid_tedges(nodes, cost_occ - low, cost_free - low)
-    flow = g.maxflow()
-    n_edges = h * (w - 1) + w * (h - 1)
-    return g.get_grid_segments(nodes), float(flow + low.sum() + constant * n_edges)
 
 
 def bench_maxflow(size, repeats, seed=0, kinds=("uniform", "office")) -> list:
@@ -208,7 +132,7 @@ class PgmaxLattice:
             warnings.simplefilter("ignore", DeprecationWarning)
             self.bp = pinfer.build_inferer(graph.bp_state, backend="bp")
         self._infer = pinfer
-        u = _unary(self.observed, link)
+        u = floored_unary(self.observed, link)
         self.arrays = self.bp.init(evidence_updates={self.vars: np.log(np.stack([u, 1.0 - u], axis=-1))})
 
     def runner(self, iterations, temperature=1.0):
@@ -264,14 +188,14 @@ def bench_pgmax(size, repeats, iterations=ITERATIONS, seed=0, damping=DAMPING) -
     seconds = median_time(lambda: go(lattice.arrays, damping), repeats) / iterations
 
     undamped, _ = go(lattice.arrays, 0.0)
-    ours = infer(observed, schedule="flooding", damping=0.0, max_iter=iterations, tol=0.0, pairing="oriented")
+    ours = infer(observed, schedule="flooding", max_iter=iterations, tol=0.0, pairing="oriented")
     difference = float(np.abs(lattice.marginals(undamped) - ours.beliefs.probability).max())
     # the scale of float32 rounding here: crfmap's own float32 run against its float64 one
-    ours32 = infer(observed, schedule="flooding", damping=0.0, max_iter=iterations, tol=0.0, pairing="oriented",
+    ours32 = infer(observed, schedule="flooding", max_iter=iterations, tol=0.0, pairing="oriented",
                    dtype=np.float32)
     rounding = float(np.abs(ours32.beliefs.probability - ours.beliefs.probability).max())
 
-    fixed = infer(observed, schedule="flooding", damping=damping, max_iter=FIXED_POINT_MAX_ITER,
+    fixed = infer(observed, schedule=Flooding(damping=damping), max_iter=FIXED_POINT_MAX_ITER,
                   tol=FIXED_POINT_TOL, pairing="oriented")
     warm, changes = go(lattice.with_messages(fixed.messages), damping)
     fixed_difference = float(np.abs(lattice.marginals(warm) - fixed.beliefs.probability).max())

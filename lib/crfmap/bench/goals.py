@@ -1,6 +1,6 @@
 """Speed as users feel it (issue 13): one record per goal, measured in the same run as the suite.
 
-- ``infer-vs-kernel``: :func:`crfmap.crf.lbp.infer` end to end (packing, iterations, beliefs,
+- ``infer-vs-kernel``: :func:`crfmap.crf.inference.lbp.infer` end to end (packing, iterations, beliefs,
   unpacking) against its kernel's per-iteration throughput, same size, dtype and threads
   (goal: ratio >= 0.8 at 2048², 4096², 8192²). Built from the suite's own ``crfmap-fast`` and
   ``crfmap-infer`` records of that size, so both come from one run.
@@ -16,12 +16,12 @@
   min from a fresh clone).
 - ``converge-start``: 4096² (quick: 256²) noisy office floor, table [[10, 1], [1, 10]], until the
   largest message change is below 1e-4, from the plain (uniform) start and, when
-  :func:`crfmap.crf.lbp.infer` has one, from a coarse-to-fine start, with the largest belief
+  :func:`crfmap.crf.inference.lbp.infer` has one, from a coarse-to-fine start, with the largest belief
   difference between the two (goal: <= 1 s).
 
 The coarse start is picked up by keyword: the first of :data:`COARSE_START_OPTIONS` whose
 keyword ``infer`` accepts and whose value it does not reject; ``crfmap bench`` then reports it as
-``start: <keyword>=<value>``: ``init="coarse"`` (:mod:`crfmap.crf.multiscale`; ``start`` names the
+``start: <keyword>=<value>``: ``init="coarse"`` (:mod:`crfmap.crf.inference.multiscale`; ``start`` names the
 thesis schedule's corner and rejects ``"coarse"``).
 """
 from __future__ import annotations
@@ -241,13 +241,13 @@ def reproduce_record(path=None, wall_path=None) -> dict:
 
 
 def coarse_start_option():
-    """The keyword arguments of :func:`crfmap.crf.lbp.infer`'s coarse-to-fine start, or None.
+    """The keyword arguments of :func:`crfmap.crf.inference.lbp.infer`'s coarse-to-fine start, or None.
 
     An option counts when ``infer`` takes the keyword, accepts the value and its first iteration
     then differs from the uniform start's (``start`` exists for the thesis schedule's corner and
     the checkerboard ignores it).
     """
-    from crfmap.crf.lbp import infer
+    from crfmap.crf.inference.lbp import infer
     from crfmap.errors import InputError
 
     accepted = inspect.signature(infer).parameters
@@ -272,7 +272,7 @@ def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000, runs=2) -> li
     of ``runs`` timed runs on the full grid is kept; ``first_run_seconds`` is the first of them,
     which also pays for touching the grid-sized buffers for the first time in the process.
     """
-    from crfmap.crf.lbp import infer
+    from crfmap.crf.inference.lbp import infer
 
     obs = bench_grid(size, kind="office")
     starts = {"uniform": {}}

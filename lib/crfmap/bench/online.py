@@ -6,8 +6,8 @@ import time
 import numpy as np
 
 from crfmap.bench.common import EQUALITY_TABLE, INTEL, ONLINE_MARGIN, median_time, record
-from crfmap.crf.lbp import infer
-from crfmap.crf.potentials import DEFAULT_HIDDEN
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN
 
 
 def bench_online(quick=False, progress=False, final_tol=None):

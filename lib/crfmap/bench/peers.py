@@ -20,7 +20,7 @@ def bench_peers(quick=False, resolution=0.05):
     from crfmap import paths
     from crfmap.assess.peers import peer_rows
     from crfmap.assess.scansplit import scan_split
-    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
     from crfmap.io.carmen import read_carmen
 
     names = ["intel"] if quick else list(RECORDINGS)

@@ -11,11 +11,11 @@ Methods:
 
 - ``numpy-baseline``: THE BASELINE, :class:`NumpyCheckerboard`, written here: the same
   checkerboard schedule, one odds ratio per message, float32, whole-array NumPy operations.
-- ``crfmap-fast``: the fast kernels (:mod:`crfmap.crf._lbp_fast`), blocks of ``block`` iterations
+- ``crfmap-fast``: the fast kernels (:mod:`crfmap.crf.engine._message_update`), blocks of ``block`` iterations
   per trip through memory; ``-general`` with a non-symmetric table, ``-bounded`` on a disc
-  (bounded LBP) covering about half the grid; ``crfmap-infer``: :func:`crfmap.crf.lbp.infer`
+  (bounded LBP) covering about half the grid; ``crfmap-infer``: :func:`crfmap.crf.inference.lbp.infer`
   end to end (packing, iterations, beliefs, unpacking).
-- ``crfmap-plain``: the reference kernels (:mod:`crfmap.crf._lbp_kernels`), small grids only.
+- ``crfmap-plain``: the reference kernels (:mod:`crfmap.crf.inference._plain_kernels`), small grids only.
 - ``memory-bandwidth``: a streaming triad over 2 x 256 MB; ``bound_mcells_per_second`` is the
   rate at which one pass per iteration (36 bytes per cell in float32) would saturate it.
 - ``converge``: noisy office floors (flip noise 0.2), table [[10, 1], [1, 10]], until the
@@ -26,10 +26,10 @@ Methods:
   ``-margin`` only its cells near observations), the final map against an offline run.
 - ``peers-<recording>`` (with the online rows): wall time of the published peers (OctoMap's update,
   Bayesian Hilbert maps) and the default preset on each CARMEN log's even scans (:mod:`crfmap.bench.peers`).
-- ``memory``: peak resident memory of :func:`crfmap.crf.lbp.infer` per cell, in a child process.
+- ``memory``: peak resident memory of :func:`crfmap.crf.inference.lbp.infer` per cell, in a child process.
 - ``pgmax-bp`` / ``pymaxflow-map``: when installed, PGMax's LBP and a PyMaxflow graph cut on the
   same model (:mod:`crfmap.bench.external`); a "not installed" record otherwise.
-- ``jit-compile``: the first calls of :func:`crfmap.crf.lbp.infer` in a new process, with an empty
+- ``jit-compile``: the first calls of :func:`crfmap.crf.inference.lbp.infer` in a new process, with an empty
   numba cache (compilation; not in quick runs, nor with ``cold=False``) and with the package's cache.
 - issue 13's goals (``goals=True``, :mod:`crfmap.bench.goals`): ``infer-vs-kernel`` (per size),
   ``start-cold`` / ``start-warm`` / ``start-env``, ``explorer-redraw`` / ``explorer-scene-change``,
@@ -46,8 +46,11 @@ import time
 
 import numpy as np
 
-from crfmap.crf import packed as F
-from crfmap.crf.lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, infer
+from crfmap.crf.engine import packed as F
+from crfmap.crf.engine.messages import MESSAGE_FLOOR
+from crfmap.crf.engine.packed import PASS_ITERATIONS
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.schedules import Checkerboard
 from crfmap.bench.baseline import NumpyCheckerboard
 from crfmap.bench.common import (
     SIZES,
@@ -66,14 +69,17 @@ from crfmap.bench.common import (
     WORK,
     QUICK_WORK,
 )
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables
+
+PLAIN = Checkerboard(kernel="plain")  # the reference kernels
+
 
 def _iterations_for(size, block, work=WORK):
     """Iterations per timed repeat: about ``work`` cell updates, a multiple of ``block``."""
     return max(block, int(round(work / (size * size) / block)) * block)
 
 
-def bench_fast(size, dtype, threads, repeats, hidden=DEFAULT_HIDDEN, bounded=False, block=DEFAULT_BLOCK,
+def bench_fast(size, dtype, threads, repeats, hidden=DEFAULT_HIDDEN, bounded=False, block=PASS_ITERATIONS,
                method="crfmap-fast", work=WORK):
     """Throughput of the fast kernel: passes of ``block`` iterations, the last of each measured."""
     obs = bench_grid(size)
@@ -114,17 +120,18 @@ def bench_baseline(size, repeats, dtype=np.float32):
 
 def bench_plain(size, repeats, threads):
     obs = bench_grid(size)
-    infer(obs, max_iter=1, tol=0.0, kernel="plain", dtype=np.float32, threads=threads)
+    infer(obs, max_iter=1, tol=0.0, schedule=PLAIN, dtype=np.float32, threads=threads)
     n = 4
-    seconds = median_time(lambda: infer(obs, max_iter=n, tol=0.0, kernel="plain", dtype=np.float32,
+    seconds = median_time(lambda: infer(obs, max_iter=n, tol=0.0, schedule=PLAIN, dtype=np.float32,
                                          threads=threads), repeats) / n
     return record("crfmap-plain", size, np.float32, threads, seconds, iterations_timed=n)
 
 
-def bench_infer(size, dtype, threads, repeats, block=DEFAULT_BLOCK, work=WORK):
+def bench_infer(size, dtype, threads, repeats, block=PASS_ITERATIONS, work=WORK):
     obs = bench_grid(size)
     n = _iterations_for(size, block, work)
-    seconds = median_time(lambda: infer(obs, max_iter=n, tol=0.0, dtype=dtype, threads=threads, block=block),
+    seconds = median_time(lambda: infer(obs, max_iter=n, tol=0.0, dtype=dtype, threads=threads,
+                                        schedule=Checkerboard(block=block)),
                            repeats) / n
     return record("crfmap-infer", size, dtype, threads, seconds, iterations_timed=n,
                   note="infer() end to end: packing, iterations, beliefs, unpacking")
@@ -136,7 +143,7 @@ def agreement(size=96, iterations=7, seed=1) -> dict:
     nb = NumpyCheckerboard(obs, dtype=np.float64)
     nb.iterate(iterations)
     fast = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64)
-    plain = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64, kernel="plain")
+    plain = infer(obs, max_iter=iterations, tol=0.0, dtype=np.float64, schedule=PLAIN)
     return record("agreement", size, np.float64, None, None, iterations=iterations,
                   max_difference_baseline_vs_fast=float(np.abs(nb.beliefs() - fast.beliefs.probability).max()),
                   max_difference_plain_vs_fast=float(np.abs(plain.beliefs.probability - fast.beliefs.probability).max()))
@@ -146,7 +153,8 @@ def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL, runs=2):
     """Time to convergence on the noisy office floor, with and without frozen tiles (best of ``runs``)."""
     obs = bench_grid(size, kind="office")
     out = []
-    exact = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, freeze=0.0)
+    exact = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads,
+                  schedule=Checkerboard(freeze=0.0))
     fast = min((infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads) for _ in range(max(runs, 1))),
                key=lambda r: r.seconds)
     diff = float(np.abs(fast.beliefs.probability - exact.beliefs.probability).max())
@@ -156,7 +164,7 @@ def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL, runs=2):
                           tol=tol, max_belief_difference_vs_exact=diff if name == "converge" else 0.0,
                           note="Mcell/s here is cells x iterations / time: frozen tiles count but cost nothing"))
     if with_plain:
-        plain = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, kernel="plain")
+        plain = infer(obs, tol=tol, max_iter=5000, dtype=np.float32, threads=threads, schedule=PLAIN)
         out.append(record("crfmap-converge-plain", size, np.float32, threads, plain.seconds / max(plain.iterations, 1),
                           iterations=plain.iterations, seconds_to_converge=plain.seconds, converged=plain.converged,
                           tol=tol, max_belief_difference_vs_exact=float(
@@ -164,8 +172,8 @@ def bench_converge(size, threads, with_plain=False, tol=CONVERGE_TOL, runs=2):
     return out
 
 
-def peak_memory_per_cell(size, dtype="float32", block=DEFAULT_BLOCK) -> dict:
-    """Peak memory :func:`crfmap.crf.lbp.infer` adds beyond its float64 input, per cell (child process).
+def peak_memory_per_cell(size, dtype="float32", block=PASS_ITERATIONS) -> dict:
+    """Peak memory :func:`crfmap.crf.inference.lbp.infer` adds beyond its float64 input, per cell (child process).
 
     ``bytes_per_cell``: the peak resident set during the call (Linux resets its high-water mark
     through /proc/self/clear_refs) minus the resident set before it; ``array_bytes_per_cell``:
@@ -173,7 +181,7 @@ def peak_memory_per_cell(size, dtype="float32", block=DEFAULT_BLOCK) -> dict:
     """
     code = (
         "import tracemalloc, numpy as np\n"
-        "from crfmap.crf.lbp import infer\n"
+        "from crfmap.crf.inference.lbp import infer\n"
         "def status(key):\n"
         "    for line in open('/proc/self/status'):\n"
         "        if line.startswith(key):\n"
@@ -206,7 +214,7 @@ def compile_seconds(cold=True) -> dict:
 
     code = (
         "import time, numpy as np\n"
-        "from crfmap.crf.lbp import infer\n"
+        "from crfmap.crf.inference.lbp import infer\n"
         "p = np.random.default_rng(0).uniform(0, 1, (600, 600))\n"
         "t = time.perf_counter()\n"
         "infer(p[:64, :64], max_iter=3, dtype=np.float32)\n"

@@ -21,7 +21,8 @@ def add_parser(sub):
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
-    p.add_argument("--preset", default="certainty", choices=["certainty", "thesis"], help="the preset to score")
+    p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
+                   help="the preset to score (default: crfmap.crf.model.presets.DEFAULT_PRESET, certainty)")
     p.add_argument("--methods", default="all", help="comma-separated rows to score (default all: raw, logodds, "
                    "mean3x3, median3x3, closing3x3, thesis, graphcut, the preset, octomap, hilbert); raw is always "
                    "scored")
@@ -60,6 +61,13 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--block", f"must be a positive number of cells, got {args.block}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be positive, got {args.resolution}")
+    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+
+    args.preset = DEFAULT_PRESET if args.preset is None else args.preset
+    try:
+        get_preset(args.preset)
+    except InputError as e:
+        raise InputError("--preset", e.problem) from None
     methods = _methods(args.methods, args.preset)
     rec = load_recording(args.input)
     split = scan_split(rec.scans, args.resolution, parity=args.parity)

@@ -16,25 +16,28 @@ def add_parser(sub):
     )
     p.add_argument("input", help="map_server YAML or .npy grid of P(occupied)")
     p.add_argument("output", help="map_server YAML (trinary by default, see --mode) or .npy (exact P)")
-    p.add_argument("--preset", default="certainty", choices=["certainty", "thesis"],
-                   help="certainty (default): recommended for real maps; each cell's link strength follows its "
+    p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
+                   help="the CRF's configuration (crfmap.crf.model.presets; default: DEFAULT_PRESET, certainty). "
+                   "certainty: recommended for real maps; each cell's link strength follows its "
                    "evidence (a map file's P read back as net hits), coupling below critical, LBP only within 5 "
                    "cells of an observation (better scan-split scores on every real recording; see crfmap "
                    "evaluate). thesis: the thesis's tables [[10,1],[1,10]] and identity link over the whole "
                    "grid, for the reproduction (ordered phase: erases thin walls, fills unseen space)")
-    p.add_argument("--hidden", default=None, help="hidden pairwise table oo,oe,eo,ee (default: the thesis's "
-                   "10,1,1,10; giving --hidden or --link runs these tables instead of the certainty preset)")
-    p.add_argument("--link", default=None, help="link table oo,oe,eo,ee (default 1,0,0,1)")
+    p.add_argument("--hidden", default=None, help="hidden pairwise table oo,oe,eo,ee: giving --hidden or --link "
+                   "makes a custom preset of these tables instead of --preset (default 10,1,1,10, the thesis's)")
+    p.add_argument("--link", default=None, help="link table oo,oe,eo,ee of a custom preset (default 1,0,0,1)")
     p.add_argument("--schedule", default="checkerboard", choices=["checkerboard", "flooding", "sweep", "thesis"])
     p.add_argument("--max-iter", type=int, default=1000, help="iteration limit (the thesis used 2)")
     p.add_argument("--tol", type=float, default=1e-5, help="stop when the largest message change is below this")
     p.add_argument("--damping", type=float, default=0.0, help="weight of the old message, in [0, 1)")
-    p.add_argument("--pairing", default="receiver", choices=["receiver", "oriented"],
-                   help="how a non-symmetric hidden table applies to an edge (see crfmap.crf.potentials)")
+    p.add_argument("--pairing", default=None, choices=["receiver", "oriented"],
+                   help="custom --hidden tables only: how a non-symmetric hidden table applies to an edge "
+                   "(default receiver; see crfmap.crf.model.potentials)")
     p.add_argument("--float32", action="store_true", help="compute in float32 (faster, less memory)")
     p.add_argument("--margin", type=int, default=None, metavar="CELLS",
                    help="infer only cells within CELLS of an observed cell; the rest stay unknown "
-                   "(default: the whole grid, as the thesis; see crfmap.crf.lbp.near_known)")
+                   "(default: the preset's, 5 for certainty, the whole grid for thesis and custom tables; see "
+                   "crfmap.crf.inference.regions.near_known)")
     p.add_argument("--free-thresh", type=float, default=None,
                    help="override a YAML input's free_thresh when loading (Humble's map_saver writes 0.25, "
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
@@ -77,43 +80,45 @@ def _check_options(args, hidden, link):
     check_output([args.input], args.output, force=args.force)
 
 
+def _preset(args):
+    """The preset the options ask for: --hidden/--link make a custom one, else --preset (default DEFAULT_PRESET)."""
+    from dataclasses import replace
+
+    from crfmap.crf.model.potentials import check_table
+    from crfmap.crf.model.presets import DEFAULT_PRESET, custom_preset, get_preset
+
+    if args.hidden is not None or args.link is not None:
+        if args.preset is not None:
+            raise InputError("--preset", "--hidden/--link make a custom preset of their own: give them or --preset")
+        hidden = check_table(args.hidden or "10,1,1,10", "--hidden")
+        link = check_table(args.link or "1,0,0,1", "--link")
+        _check_options(args, hidden, link)
+        return custom_preset(hidden, link, args.pairing or "receiver", margin=args.margin)
+    name = DEFAULT_PRESET if args.preset is None else args.preset
+    if args.pairing is not None:
+        raise InputError("--pairing", f"applies to custom --hidden/--link tables only, not to the {name} preset")
+    try:
+        preset = get_preset(name)
+    except InputError as e:
+        raise InputError("--preset", e.problem) from None
+    _check_options(args, preset.hidden, preset.link)
+    return preset if args.margin is None else replace(preset, margin=args.margin)
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from crfmap.crf.lbp import infer
+    from crfmap.crf.inference.schedules import SETTINGS
     from crfmap.io.grid_files import load_grid
-    from crfmap.crf.potentials import check_table
 
     if args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
-    hidden = check_table(args.hidden or "10,1,1,10", "--hidden")
-    link = check_table(args.link or "1,0,0,1", "--link")
-    _check_options(args, hidden, link)
-    scaled = args.preset == "certainty" and args.hidden is None and args.link is None
+    preset = _preset(args)
+    schedule = SETTINGS[args.schedule](damping=args.damping)
     grid = load_grid(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh,
                      loader=args.loader)
-    region = None
-    if scaled:  # the certainty preset: per-cell link strengths from P, near observations only
-        from dataclasses import replace
-
-        from crfmap.crf.presets import get_preset
-
-        preset = get_preset("certainty")
-        if args.margin is not None:
-            preset = replace(preset, margin=args.margin)
-        result = preset.refine(grid, schedule=args.schedule, max_iter=args.max_iter, tol=args.tol,
-                               damping=args.damping, dtype=np.float32 if args.float32 else np.float64)
-    elif args.margin is not None:
-        from crfmap.crf.lbp import near_known
-
-        region = near_known(grid, args.margin)
-    if not scaled:
-        result = infer(grid, hidden, link, schedule=args.schedule, max_iter=args.max_iter, tol=args.tol,
-                       damping=args.damping, pairing=args.pairing, region=region,
-                       dtype=np.float32 if args.float32 else np.float64)
-    if region is not None:  # outside the region nothing was inferred: keep the input there
-        beliefs = np.where(region, result.beliefs.probability, grid.probability)
-        result.beliefs = result.beliefs.with_probability(beliefs)
+    result = preset.refine(grid, schedule=schedule, max_iter=args.max_iter, tol=args.tol,
+                           dtype=np.float32 if args.float32 else np.float64)
     nav2_view = save_map_output(result.beliefs, args.output, args)
     print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, "
           f"{result.seconds:.3f} s -> {args.output}: {nav2_view}")

@@ -1,32 +1,56 @@
-"""The CRF and its inference: potentials, loopy belief propagation, exact enumeration and a textbook reference LBP.
+"""The CRF and its inference, in three layers a reader can take one at a time.
+
+- :mod:`crfmap.crf.model`: what the CRF is. ``potentials`` (the two 2x2 tables and how they are
+  checked), ``presets`` (named configurations: the one source of settings for ``crfmap infer``,
+  ``crfmap evaluate`` and the notebooks), ``evidence`` (cells made certain by hard evidence).
+- :mod:`crfmap.crf.inference`: how it is solved. ``lbp.infer`` (checks its input, picks a kernel,
+  returns an ``LBPResult`` from ``result``), ``schedules`` (each schedule with the settings
+  that apply to it, and the plain kernels that run them), ``regions`` (bounded LBP's masks),
+  ``multiscale`` (coarse-to-fine start), ``exact`` and ``reference`` (brute force and a textbook
+  LBP, the references the tests compare with), ``compiling`` (the first-run notice).
+- :mod:`crfmap.crf.engine`: the fast checkerboard engine. ``solve.solve`` (its one entry, an
+  ``EngineResult``), ``packed`` (red/black odds planes and the passes over them),
+  ``_message_update`` (the numba message update), ``_layout`` (packing kernels),
+  ``incremental`` (the public API the online mapper drives), ``messages`` and ``workspace``.
+
+From :func:`infer` to the kernel that updates a message: ``infer -> engine.solve.solve ->
+PackedBlock.run -> _pass_serial / _pass_parallel`` (fast), ``infer -> run_schedule -> kernel``
+(plain).
 
 Public API (imported on first use, so ``import crfmap.crf`` stays cheap):
-
-- :mod:`crfmap.crf.potentials`: ``DEFAULT_HIDDEN``, ``DEFAULT_LINK``, ``check_table``, ``check_pairing``, ``directional_tables``, ``link_unary``
-- :mod:`crfmap.crf.lbp`: ``infer``, ``LBPResult``, ``SCHEDULES``, ``near_known``, ``disc_region``, ``initial_messages``
-- :mod:`crfmap.crf.packed`: ``PackedBlock``
-- :mod:`crfmap.crf.exact`: ``exact_marginals``
-- :mod:`crfmap.crf.reference`: ``reference_lbp``
 """
 from __future__ import annotations
 
 from crfmap.lazy import attach
 
 _API = {
-    "DEFAULT_HIDDEN": "potentials",
-    "DEFAULT_LINK": "potentials",
-    "check_table": "potentials",
-    "check_pairing": "potentials",
-    "directional_tables": "potentials",
-    "link_unary": "potentials",
-    "infer": "lbp",
-    "LBPResult": "lbp",
-    "SCHEDULES": "lbp",
-    "near_known": "lbp",
-    "disc_region": "lbp",
-    "initial_messages": "lbp",
-    "PackedBlock": "packed",
-    "exact_marginals": "exact",
-    "reference_lbp": "reference",
+    "DEFAULT_HIDDEN": "model.potentials",
+    "DEFAULT_LINK": "model.potentials",
+    "check_table": "model.potentials",
+    "check_pairing": "model.potentials",
+    "directional_tables": "model.potentials",
+    "link_unary": "model.potentials",
+    "DEFAULT_PRESET": "model.presets",
+    "PRESETS": "model.presets",
+    "Preset": "model.presets",
+    "get_preset": "model.presets",
+    "custom_preset": "model.presets",
+    "infer": "inference.lbp",
+    "message": "inference.lbp",
+    "LBPResult": "inference.result",
+    "SCHEDULES": "inference.schedules",
+    "Checkerboard": "inference.schedules",
+    "Flooding": "inference.schedules",
+    "Sweep": "inference.schedules",
+    "Thesis": "inference.schedules",
+    "near_known": "inference.regions",
+    "disc_region": "inference.regions",
+    "exact_marginals": "inference.exact",
+    "reference_lbp": "inference.reference",
+    "initial_messages": "engine.messages",
+    "MESSAGE_FLOOR": "engine.messages",
+    "PackedBlock": "engine.packed",
+    "IncrementalLBP": "engine.incremental",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)
+__doc__ += "\n".join(f"- ``{name}`` (:mod:`crfmap.crf.{module}`)" for name, module in _API.items()) + "\n"

@@ -28,9 +28,12 @@ import numpy as np
 from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.crf.lbp import SCHEDULES, LBPResult, disc_region, infer
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.regions import disc_region
+from crfmap.crf.inference.result import LBPResult
+from crfmap.crf.inference.schedules import SCHEDULES, Checkerboard
 from crfmap.assess.metrics import Report, evaluate
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
+from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 
 EXPLORER_SCENES = ("x", "occluded-train", "occluded-test", "enclosed-train", "enclosed-test",
                    "hollow-train", "hollow-test", "office")
@@ -143,7 +146,7 @@ def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK
     scene : one of :data:`EXPLORER_SCENES`
     noise : image sigma (``"x"``) or range noise bound C [m] (other scenes)
     hidden, link : 2x2 tables (rows C1 C0, columns N1 N0)
-    schedule : one of :data:`crfmap.crf.lbp.SCHEDULES`
+    schedule : one of :data:`crfmap.crf.inference.schedules.SCHEDULES`
     iterations : int, or None to run to convergence (max message change < 1e-5)
     radius : None, or bounded LBP (sec. 3.4.4): only cells within ``radius`` [m] of the robot's
         start send messages
@@ -214,11 +217,11 @@ def warm_up(schedules=SCHEDULES, on_schedule=None) -> dict:
         kernels = ("auto", "plain") if schedule == "checkerboard" else ("auto",)
         for kernel in kernels:
             for region in (None, inner):
-                r = infer(grid, schedule=schedule, max_iter=2, tol=TOLERANCE, region=region, kernel=kernel,
-                          threads=THREADS)
+                settings = Checkerboard(kernel=kernel) if schedule == "checkerboard" else schedule
+                r = infer(grid, schedule=settings, max_iter=2, tol=TOLERANCE, region=region, threads=THREADS)
                 _WARMED.add((schedule, region is not None, r.kernel))
         seconds[schedule] = time.perf_counter() - t0
-    # a table with zero entries spreads certainty from exact 0/1 cells (crfmap.crf.evidence): compile that too
+    # a table with zero entries spreads certainty from exact 0/1 cells (crfmap.crf.model.evidence): compile that too
     certain = grid.probability.copy()
     certain[0, 0] = 1.0
     for region in (None, inner):

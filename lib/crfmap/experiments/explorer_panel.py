@@ -22,8 +22,8 @@ import time
 
 import numpy as np
 
-from crfmap.crf.lbp import SCHEDULES
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.inference.schedules import SCHEDULES
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.experiments import explorer
 from crfmap.experiments.explorer_view import ExplorerView
 

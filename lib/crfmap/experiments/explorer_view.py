@@ -92,7 +92,7 @@ class ExplorerView:
             a[name + "_title"] = ax.set_title(" \n ")
             ax.set_xlabel("x [m]")
             ax.set_ylabel("y [m]")
-        # bounded LBP covers the cells whose centres lie in this disc (crfmap.crf.lbp.disc_region)
+        # bounded LBP covers the cells whose centres lie in this disc (crfmap.crf.inference.regions.disc_region)
         a["bound"] = axes[2].add_patch(Circle((0, 0), 1.0, fill=False, edgecolor="tab:red", linewidth=1.0,
                                               visible=False))
         (a["start"],) = axes[2].plot([0], [0], marker="o", color="tab:red", markersize=4, visible=False)

@@ -1,6 +1,6 @@
 """Notebook 07's online section: map a log scan by scan with :class:`~crfmap.mapping.online.OnlineMapper`, time it,
 summarise what LBP did while mapping, and check the end result against the offline pipeline
-(:func:`~crfmap.mapping.builder.build_grid` of all the scans, then :func:`~crfmap.crf.lbp.infer`).
+(:func:`~crfmap.mapping.builder.build_grid` of all the scans, then :func:`~crfmap.crf.inference.lbp.infer`).
 
 >>> import numpy as np
 >>> from crfmap.mapping.online import OnlineMapper
@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from crfmap.crf.lbp import infer
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.grid import UNKNOWN
 from crfmap.mapping.builder import build_grid
 from crfmap.mapping.online import OnlineMapper

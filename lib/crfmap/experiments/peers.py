@@ -11,7 +11,7 @@ import json
 import numpy as np
 
 from crfmap import paths
-from crfmap.crf.presets import DEFAULT_PRESET
+from crfmap.crf.model.presets import DEFAULT_PRESET
 
 MORE_RECORDINGS = {"csail": "carmen/csail-corrected.log.gz", "fr101": "carmen/freiburg-101-corrected.log.gz"}
 TABLE_ROWS = ("raw", "logodds", "thesis", "graphcut", DEFAULT_PRESET, "octomap", "hilbert")

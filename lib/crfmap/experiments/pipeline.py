@@ -32,10 +32,11 @@ from crfmap.mapping.builder import build_grid
 from crfmap.checks import check_pair
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.crf.lbp import LBPResult, infer
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.result import LBPResult
 from crfmap.assess.learning import LearningResult, learn_gradient, lbp_mse, rescale
 from crfmap.assess.metrics import Report, evaluate, roc_curve
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_table
+from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.recording import Recording
 from crfmap.world.scenes import Scene
 
@@ -131,7 +132,7 @@ def evaluate_pipeline(observed: OccupancyGrid, truth: OccupancyGrid, hidden=DEFA
                       lbp_options=None) -> PipelineResult:
     """Run LBP on ``observed`` with these tables and score the beliefs against ``truth``.
 
-    ``lbp_options`` are keyword arguments of :func:`crfmap.crf.lbp.infer` (default
+    ``lbp_options`` are keyword arguments of :func:`crfmap.crf.inference.lbp.infer` (default
     :data:`TO_CONVERGENCE`: run to convergence; :data:`THESIS_TWO_ITERATIONS` is the thesis's).
 
     >>> g = OccupancyGrid(np.array([[0.9, 0.5, 0.9]]))
@@ -225,7 +226,7 @@ def train_and_test(train: tuple, test: tuple, learners: dict, lbp_settings=None,
     train, test : (observed OccupancyGrid, truth OccupancyGrid)
     learners : name -> callable(observed, truth, lbp_options) returning a LearningResult,
         e.g. ``{"thesis": lambda o, t, opts: learn_thesis(o, t, lbp_options=opts)}``
-    lbp_settings : name -> keyword arguments of :func:`crfmap.crf.lbp.infer`; default
+    lbp_settings : name -> keyword arguments of :func:`crfmap.crf.inference.lbp.infer`; default
         ``{"converged": TO_CONVERGENCE, "thesis 2 iterations": THESIS_TWO_ITERATIONS}``
 
     Returns

@@ -7,9 +7,9 @@ builder's own ray casting), refreshes the observation of every cell a beam passe
 checkerboard LBP on the cells within ``radius`` of the laser, warm-started from the messages
 the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to
 convergence, which gives the offline result (:func:`crfmap.mapping.builder.build_grid` then
-:func:`crfmap.crf.lbp.infer`) when LBP has one fixed point. Hard evidence never arises here: an
+:func:`crfmap.crf.inference.lbp.infer`) when LBP has one fixed point. Hard evidence never arises here: an
 arctan observation lies strictly inside (0, 1), and no link table (no all-zero row) makes such a
-cell certain (:mod:`crfmap.crf.evidence`), so nothing is clamped.
+cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet
@@ -29,12 +29,13 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from crfmap.mapping import builder
-from crfmap.crf.packed import PackedBlock, fast_tables_ok, unary_odds
+from crfmap.crf.engine.incremental import IncrementalLBP
+from crfmap.crf.inference.regions import near_known
+from crfmap.crf.inference.result import LBPResult
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid
-from crfmap.crf.lbp import DEFAULT_BLOCK, MESSAGE_FLOOR, LBPResult, near_known, run_packed
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table, directional_tables
+from crfmap.mapping import builder
 from crfmap.recording import ScanSet
 
 DEFAULT_RADIUS = 4.0  # [m] bounded LBP runs on the cells within this distance of the laser
@@ -42,25 +43,14 @@ DEFAULT_MAX_ITER = 16  # LBP iterations per scan at most
 
 
 @njit(cache=True, nogil=True)
-def _refresh_observations(cells, occupied, empty, link, floor, un, known, near, margin):
-    """Re-derive the observation odds of the cells a scan touched, from their hit counts.
-
-    Sets each cell's P = 0.5 + atan(occupied - empty) / pi (thesis eq. 16) into the red/black
-    observation planes ``un``. With ``margin`` >= 0, a cell observed for the first time marks
-    every cell within ``margin`` (Chebyshev distance) in the red/black planes ``near``, as
-    :func:`crfmap.crf.lbp.near_known` does for a whole grid.
-    """
-    height, width = occupied.shape
+def _arctan_observations(cells, occupied, empty):
+    """P = 0.5 + atan(occupied - empty) / pi (thesis eq. 16) of the cells (x, y) = ``cells[i]`` a scan touched."""
+    out = np.empty(cells.shape[0])
     for i in range(cells.shape[0]):
         x = cells[i, 0]
         y = cells[i, 1]
-        p = 0.5 + math.atan(occupied[y, x] - empty[y, x]) / math.pi
-        un[(x + y) & 1, y + 1, (x >> 1) + 1] = unary_odds(p, link, floor)
-        if margin >= 0 and known[y, x] == 0:
-            known[y, x] = 1
-            for ny in range(max(y - margin, 0), min(y + margin + 1, height)):
-                for nx in range(max(x - margin, 0), min(x + margin + 1, width)):
-                    near[(nx + ny) & 1, ny + 1, (nx >> 1) + 1] = 1
+        out[i] = 0.5 + math.atan(occupied[y, x] - empty[y, x]) / math.pi
+    return out
 
 
 @dataclass
@@ -81,7 +71,7 @@ class OnlineMapper:
     hits : crfmap.mapping.builder.HitCounter
         The grid and the laser's geometry, and the hit counts (fresh, or holding earlier scans);
         :meth:`for_scans` and :meth:`for_sensor` make one.
-    hidden, link : 2x2 tables (see :mod:`crfmap.crf.potentials`)
+    hidden, link : 2x2 tables (see :mod:`crfmap.crf.model.potentials`)
     radius : float
         [m] LBP runs on the cells whose centres lie within this distance of the laser.
     max_iter : int
@@ -93,7 +83,7 @@ class OnlineMapper:
     margin : None or int
         [cells] With a margin, only cells within ``margin`` cells (Chebyshev distance) of a cell
         some beam has observed send messages, as with ``region=near_known(grid, margin)`` in
-        :func:`crfmap.crf.lbp.infer`: gaps and occlusions up to ``margin`` cells deep are filled
+        :func:`crfmap.crf.inference.lbp.infer`: gaps and occlusions up to ``margin`` cells deep are filled
         and the unexplored rest stays unknown. None: every cell in the disc sends (the thesis's
         model; with a strong coupling it fills unexplored space with its border's state).
     """
@@ -105,31 +95,21 @@ class OnlineMapper:
         self.hidden = check_table(hidden, "hidden")
         self.link = check_table(link, "link")
         self.pairing = check_pairing(pairing)
-        tables = directional_tables(self.hidden, self.pairing)
-        if not fast_tables_ok(tables):  # pragma: no cover - both pairings qualify
-            raise InputError("pairing", "the online mapper needs east/north and west/south to share tables")
         if not (np.isfinite(radius) and radius > 0):
             raise InputError("radius", f"must be a positive number of metres, got {radius!r}")
         if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
             raise InputError("max_iter", f"must be a positive integer, got {max_iter!r}")
         if not (np.isfinite(tol) and tol >= 0):
             raise InputError("tol", f"must be a non-negative number, got {tol!r}")
-        if margin is not None and not (isinstance(margin, (int, np.integer)) and margin >= 0):
-            raise InputError("margin", f"must be None or a non-negative whole number of cells, got {margin!r}")
+        self.lbp = IncrementalLBP(hits.height, hits.width, self.hidden, self.link, dtype, self.pairing, margin)
         self.hits = hits
         self.radius = float(radius)
         self.max_iter = int(max_iter)
         self.tol = float(tol)
-        self.margin = None if margin is None else int(margin)
+        self.margin = self.lbp.margin
         self.height, self.width = hits.height, hits.width
         self.resolution, self.origin, self.frame_id = hits.resolution, hits.origin, hits.frame_id
         self.n_beams = len(hits.angles)
-        self._link = np.ascontiguousarray(self.link.ravel())
-        self.packed = PackedBlock(self.height, self.width, dtype, tables, MESSAGE_FLOOR)
-        self.packed.set_unary(np.full((self.height, self.width), UNKNOWN), self.link)
-        # with a margin: cells ever observed, and the cells near them (the only senders), packed
-        self._known = np.zeros((self.height, self.width) if margin is not None else (0, 0), np.uint8)
-        self._near = np.zeros(self.packed.un.shape if margin is not None else (2, 1, 1), np.uint8)
 
     # --- construction -----------------------------------------------------------------------------
     @classmethod
@@ -161,16 +141,15 @@ class OnlineMapper:
         """Add one scan (``ranges`` [m], REP 117) taken at ``laser_pose`` (x, y, yaw) in the map frame."""
         t0 = time.perf_counter()
         cells = self.hits.add_scan(ranges, laser_pose)  # checks its input
-        _refresh_observations(cells, self.hits.occupied, self.hits.empty, self._link, MESSAGE_FLOOR, self.packed.un,
-                              self._known, self._near, -1 if self.margin is None else self.margin)
-        self._set_disc((laser_pose[0] - self.origin[0]) / self.resolution,
-                       (laser_pose[1] - self.origin[1]) / self.resolution)
-        changes = run_packed(self.packed, self.max_iter, self.tol, threads, block=DEFAULT_BLOCK)
+        self.lbp.set_observations(cells, _arctan_observations(cells, self.hits.occupied, self.hits.empty))
+        disc = self._disc((laser_pose[0] - self.origin[0]) / self.resolution,
+                          (laser_pose[1] - self.origin[1]) / self.resolution)
+        changes = self.lbp.run(self.max_iter, self.tol, threads, rows=disc)
         last = changes[-1] if changes else 0.0
-        return ScanUpdate(time.perf_counter() - t0, len(changes), bool(last < self.tol), self.packed.active_cells)
+        return ScanUpdate(time.perf_counter() - t0, len(changes), bool(last < self.tol), self.lbp.senders)
 
-    def _set_disc(self, u0, v0):
-        """Senders: cells whose centres lie within ``radius`` of the laser at (u0, v0) [cells]."""
+    def _disc(self, u0, v0):
+        """(first row, x_from, x_to): cells whose centres lie within ``radius`` of the laser at (u0, v0) [cells]."""
         rc = self.radius / self.resolution
         y_lo = max(int(math.floor(v0 - rc - 0.5)), 0)
         y_hi = min(int(math.ceil(v0 + rc - 0.5)) + 1, self.height)
@@ -180,7 +159,7 @@ class OnlineMapper:
         x_from = np.clip(np.ceil(u0 - half - 0.5), 0, self.width).astype(np.int64)
         x_to = np.clip(np.floor(u0 + half - 0.5) + 1, 0, self.width).astype(np.int64)
         x_to = np.where(inside, np.maximum(x_to, x_from), x_from)
-        self.packed.set_rows(y_lo, x_from, x_to, act=None if self.margin is None else self._near)
+        return y_lo, x_from, x_to
 
     def run(self, scans: ScanSet, progress=False, threads=1) -> np.ndarray:
         """Integrate every scan of ``scans`` in order; returns the seconds each update took."""
@@ -204,11 +183,7 @@ class OnlineMapper:
         tol = self.tol if tol is None else float(tol)
         threads = numba.get_num_threads() if threads is None else int(threads)
         t0 = time.perf_counter()
-        if self.margin is None:
-            self.packed.set_mask(None)
-        else:
-            self.packed.set_packed_mask(self._near)
-        changes = np.asarray(run_packed(self.packed, max_iter, tol, threads, block=DEFAULT_BLOCK), float)
+        changes = np.asarray(self.lbp.run(max_iter, tol, threads), float)
         beliefs = self.beliefs()
         return LBPResult(beliefs=beliefs, iterations=len(changes), max_change=changes,
                          converged=bool(changes.size and changes[-1] < tol), messages=self.messages(),
@@ -236,8 +211,8 @@ class OnlineMapper:
 
     def beliefs(self) -> OccupancyGrid:
         """The current LBP beliefs P(occupied) of every cell."""
-        return self._grid(np.clip(self.packed.beliefs(), 0.0, 1.0), model="crf-online")
+        return self._grid(np.clip(self.lbp.beliefs(), 0.0, 1.0), model="crf-online")
 
     def messages(self) -> np.ndarray:
-        """The current messages as probabilities, shape (4, H, W) (see :func:`crfmap.crf.lbp.infer`)."""
-        return self.packed.messages(np.full((4, self.height, self.width), 0.5, self.packed.dtype))
+        """The current messages as probabilities, shape (4, H, W) (see :func:`crfmap.crf.inference.lbp.infer`)."""
+        return self.lbp.messages()

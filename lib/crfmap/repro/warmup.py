@@ -3,7 +3,7 @@
 ``make test`` and ``make reproduce`` run ``python -m crfmap.repro.warmup`` first. It calls the public
 functions that reach every numba kernel the command line and the notebooks use (:data:`TASKS`):
 ``crfmap infer`` on a tiny grid with every schedule, in float64 and float32 and with ``--margin``;
-:func:`crfmap.crf.lbp.infer` on a grid large enough for the parallel pass; the grid builder and the
+:func:`crfmap.crf.inference.lbp.infer` on a grid large enough for the parallel pass; the grid builder and the
 online mapper on a few synthetic scans; the simulator with every drive and with noise; the benchmarks'
 bandwidth kernel. That compiles
 (or loads) them into the cache every entry point of the environment shares (``NUMBA_CACHE_DIR``, set
@@ -29,10 +29,12 @@ import tempfile
 import time
 from pathlib import Path
 
-KERNEL_MODULES = ("crf/_lbp_fast.py", "crf/_lbp_kernels.py")  # numba modules with cache=True the LBP calls use
+# numba modules with cache=True the LBP calls use
+KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf/engine/messages.py",
+                  "crf/inference/_plain_kernels.py")
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
-NUMBA_SOURCES = ("crf", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
+NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
                  "assess/scansplit.py")
 
 
@@ -111,7 +113,8 @@ def _checkerboard(dtype):
     """The default schedule in one dtype: the fast kernels (whole grid and ``--margin``) and the reference one."""
 
     def task():
-        from crfmap.crf.lbp import infer
+        from crfmap.crf.inference.lbp import infer
+        from crfmap.crf.inference.schedules import Checkerboard
 
         if dtype == "float32":
             _cli_infer(["--schedule", "checkerboard", "--float32"])
@@ -121,7 +124,7 @@ def _checkerboard(dtype):
 
         for grid in _tiny_grids():  # clamped certain cells in the fast kernel; the reference kernel
             infer(grid, max_iter=3, dtype=dtype)  # (kernel="plain": also what damping or odd tables run)
-            infer(grid, max_iter=3, kernel="plain", dtype=dtype)
+            infer(grid, max_iter=3, schedule=Checkerboard(kernel="plain"), dtype=dtype)
             with contextlib.suppress(InputError):  # a zero entry spreads certainty (may contradict: compiled anyway)
                 infer(grid, [[10.0, 1.0], [0.0, 10.0]], max_iter=3, dtype=dtype)
 
@@ -134,7 +137,7 @@ def _large_grid(dtype):
     def task():
         import numpy as np
 
-        from crfmap.crf.lbp import infer
+        from crfmap.crf.inference.lbp import infer
 
         # above packed.SPARSE_CELLS (2^18) senders: the per-tile measure that freezes settled tiles runs too
         p = np.random.default_rng(0).uniform(0.0, 1.0, (540, 540))

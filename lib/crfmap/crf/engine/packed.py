@@ -1,37 +1,36 @@
-"""The fast kernels' data: red/black odds planes of a block of the grid, and running passes (private).
+"""The fast engine's data: red/black odds planes of a block of the grid, and the passes that iterate them.
 
 :class:`PackedBlock` holds the observations and messages of a rectangular block of cells in the
-layout of :mod:`crfmap.crf._lbp_fast` (odds ratios, one plane per colour, ghost rows and columns),
-converts to and from the probability layout of :mod:`crfmap.crf.lbp`, and runs checkerboard
-iterations: temporally blocked passes over bands of rows, and -- on large grids -- only over
-the tiles whose messages still move (:meth:`PackedBlock.run`).
+layout of :mod:`crfmap.crf.engine._message_update` (odds ratios, one plane per colour, ghost rows
+and columns), converts to and from the probability layout of :mod:`crfmap.crf.engine.messages`,
+and runs checkerboard iterations: temporally blocked passes over bands of rows, and -- on large
+grids -- only over the tiles whose messages still move (:meth:`PackedBlock.run`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from crfmap.crf._lbp_fast import _pass_parallel, _pass_serial, _tile_max
-from crfmap.crf._packing import (  # noqa: F401  (the layout kernels, used here and re-exported)
-    unary_odds,
-    _pack_unary,
-    _pack_messages,
-    _unpack_messages,
-    _beliefs_packed,
+from crfmap.crf.engine._layout import (
     _active_extents,
+    _beliefs_packed,
     _fill_ones,
     _pack_clamped,
     _pack_mask,
+    _pack_messages,
     _pack_start,
+    _pack_unary,
+    _unpack_messages,
 )
+from crfmap.crf.engine._message_update import _pass_parallel, _pass_serial, _tile_max
 
-
-# --- the Python side: a packed block and its passes ------------------------------------------
-
-SERIAL_CELLS = 1 << 15  # blocks smaller than this run on one thread (no thread start-up per pass)
+PASS_ITERATIONS = 16  # iterations per pass at most (temporal blocking depth): the message change is measured
+# on the last of each pass, so a run may do up to PASS_ITERATIONS - 1 iterations more than it needed
+SERIAL_CELLS = 1 << 15  # blocks with fewer senders run on one thread (no thread start-up per pass)
 TILE_ROWS = 16  # [cells] tiles for measuring changes and freezing settled parts of the grid
-TILE_COLS = 32  # [cells] (narrow: at 4096² the noisy office converges with 18 % fewer cell updates than at 64)
+TILE_COLS = 32  # [cells] narrow tiles freeze settled parts sooner (fewer cell updates on large noisy maps)
+FREEZE = 0.01  # default freeze threshold, times tol: tiles that moved by less pause until a neighbour moves
 SPARSE_FRACTION = 0.5  # iterate tile by tile once fewer tiles than this still move
-SPARSE_CELLS = 1 << 18  # grids with fewer senders never freeze tiles
+SPARSE_CELLS = 1 << 18  # grids with fewer senders never freeze tiles (few tiles: freezing costs more than it saves)
 
 
 def odds_coefficients(tables, dtype, floor) -> np.ndarray:
@@ -86,7 +85,7 @@ class PackedBlock:
     floor : float, the message floor in probability
     arrays : (msg, un) or None
         Planes of the right shape and dtype to reuse (their contents are overwritten), e.g.
-        from :mod:`crfmap.crf.workspace`; None allocates new ones.
+        from :mod:`crfmap.crf.engine.workspace`; None allocates new ones.
     fill : bool
         Fill the planes with uniform messages and observations; False leaves them undefined
         for :meth:`start_uniform`, which writes every entry.
@@ -160,7 +159,7 @@ class PackedBlock:
     def clamp(self, state, implied):
         """Whole-grid block: certain cells (``state`` >= 0) send ``implied[d, state]`` (probabilities) for ever.
 
-        Call after :meth:`set_messages`; see :mod:`crfmap.crf.evidence`.
+        Call after :meth:`set_messages`; see :mod:`crfmap.crf.model.evidence`.
         """
         p = np.clip(np.asarray(implied, np.float64), self.floor, 1.0 - self.floor)
         act = np.empty(self.un.shape, np.uint8)
@@ -266,6 +265,12 @@ class PackedBlock:
         Returns the largest message change of the last iteration (NaN if not ``measure``) and,
         with ``per_tile``, the largest change per tile in it (else None).
         """
+        kernel, args, cb = self._pass(iterations, threads, measure, active)
+        kernel(*args)
+        return self._pass_change(cb, measure, per_tile)
+
+    def _pass(self, iterations, threads, measure, active):
+        """(kernel, its arguments, the per-column change buffer) of one pass; counts its cell updates."""
         edges = self.band_edges(iterations, threads)
         segs, nseg, cells = self._segments(active)
         n_ty, n_tx = self.tile_shape()
@@ -276,28 +281,30 @@ class PackedBlock:
         if self.first_phase and (iterations < 2 or active is not None or self.use_act):
             raise ValueError("the pass after start_uniform must run at least two iterations of the whole grid")
         first, self.first_phase = self.first_phase, 0
+        self.cell_updates += (self.active_cells if active is None else cells) * iterations
         if len(edges) == 2:
-            _pass_serial(*args, int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb, first)
-        else:
-            _pass_parallel(*args, edges, int(iterations), int(measure_from), cb, first)
-        if active is None:
-            cells = self.active_cells
-        self.cell_updates += cells * iterations
+            return _pass_serial, args + (int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb,
+                                         first), cb
+        return _pass_parallel, args + (edges, int(iterations), int(measure_from), cb, first), cb
+
+    def _pass_change(self, cb, measure, per_tile):
+        """The largest change of a pass's measured iteration, and per tile (see :meth:`run_pass`)."""
         if not measure:
             return float("nan"), None
         if not per_tile:
             return float(cb.max()), None
+        n_ty, n_tx = self.tile_shape()
         tiles = np.zeros((n_ty, n_tx))
         _tile_max(cb, TILE_COLS, self.w, tiles)
         return float(tiles.max()) if tiles.size else 0.0, tiles
 
-    def run(self, max_iter, tol, threads, block=16, freeze=None, first=1):
+    def run(self, max_iter, tol, threads, block=PASS_ITERATIONS, freeze=None, first=1):
         """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
 
         Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
         its last (start at 1 after a warm start, which may stop at once; at ``block`` from
-        uniform messages, which never do). With ``freeze``
-        (a change smaller than ``tol``): once fewer than SPARSE_FRACTION of the tiles moved by
+        uniform messages, which never do). With ``freeze`` (a change smaller than ``tol``;
+        None: ``FREEZE * tol``): once fewer than SPARSE_FRACTION of the tiles moved by
         more than ``freeze`` in a measured iteration, only those tiles and their four
         neighbours iterate in the next pass; the others ("frozen") keep their messages, which
         last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one
@@ -307,6 +314,8 @@ class PackedBlock:
         Returns the list of per-iteration largest changes (NaN where not measured, and for the
         last one if max_iter ends the run before a whole-grid iteration confirmed a settled one).
         """
+        if freeze is None:
+            freeze = FREEZE * tol
         changes = []
         size = max(1, int(first))
         # freezing tiles pays only on grids of many tiles
@@ -314,7 +323,9 @@ class PackedBlock:
         active = None
         while len(changes) < max_iter:
             n = min(size, block, max_iter - len(changes))
-            change, per_tile = self.run_pass(n, threads, measure=True, active=active, per_tile=sparse)
+            kernel, args, cb = self._pass(n, threads, True, active)
+            kernel(*args)  # the numba pass: every message update happens in there
+            change, per_tile = self._pass_change(cb, True, sparse)
             changes.extend([float("nan")] * (n - 1) + [change])
             whole_grid = active is None
             size *= 2

@@ -1,5 +1,5 @@
-"""Numba kernels converting between the probability layout of :mod:`crfmap.crf._lbp_kernels` and the
-red/black odds planes of :mod:`crfmap.crf._lbp_fast` (private; used by :mod:`crfmap.crf.packed`)."""
+"""Numba kernels converting between the probability layout of :mod:`crfmap.crf.inference._plain_kernels` and the
+red/black odds planes of :mod:`crfmap.crf.engine._message_update` (private; used by :mod:`crfmap.crf.engine.packed`)."""
 from __future__ import annotations
 
 import numpy as np
@@ -13,7 +13,7 @@ from numba import njit, prange
 def unary_odds(p, link, floor):
     """Odds of the message an observation P(occupied) = p sends through ``link`` (floored).
 
-    ``link`` = (l00, l01, l10, l11); as :func:`crfmap.crf.potentials.link_unary`.
+    ``link`` = (l00, l01, l10, l11); as :func:`crfmap.crf.model.potentials.link_unary`.
     """
     occ = link[0] * p + link[1] * (1.0 - p)
     emp = link[2] * p + link[3] * (1.0 - p)
@@ -122,7 +122,7 @@ def _fill_ones(planes):
 @njit(parallel=True, cache=True)
 def _pack_clamped(state, implied_odds, msg, act):
     """Cells with ``state`` >= 0 (certain) stop sending (``act`` 0) and their four messages become
-    ``implied_odds[d, state]``; the others send (``act`` 1). Whole grid, as :func:`crfmap.crf.evidence.clamp_messages`."""
+    ``implied_odds[d, state]``; the others send (``act`` 1). Whole grid, as :func:`crfmap.crf.model.evidence.clamp_messages`."""
     h, w = state.shape
     for y in prange(h):
         for x in range(w):

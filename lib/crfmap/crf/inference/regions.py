@@ -5,23 +5,18 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid, check_probability_array
-
-
-def _as_grid(grid, name="grid") -> OccupancyGrid:
-    if isinstance(grid, OccupancyGrid):
-        return grid
-    return OccupancyGrid(check_probability_array(grid, name))
+from crfmap.grid import as_grid
 
 
 def disc_region(grid, center, radius) -> np.ndarray:
     """Boolean [y, x] mask of cells whose centres lie within ``radius`` [m] of ``center`` (x, y) [m].
 
+    >>> from crfmap.grid import OccupancyGrid
     >>> g = OccupancyGrid(np.full((5, 5), 0.5))
     >>> int(disc_region(g, (2.5, 2.5), 1.0).sum())
     5
     """
-    g = _as_grid(grid)
+    g = as_grid(grid)
     ys, xs = np.mgrid[0 : g.height, 0 : g.width]
     wx, wy = g.cell_to_world(xs, ys)
     return (wx - center[0]) ** 2 + (wy - center[1]) ** 2 <= radius * radius
@@ -39,7 +34,7 @@ def near_known(grid, margin: int) -> np.ndarray:
     >>> m.astype(int).tolist()
     [[0, 0, 1, 1]]
     """
-    g = _as_grid(grid)
+    g = as_grid(grid)
     if not (isinstance(margin, (int, np.integer)) and margin >= 0):
         raise InputError("margin", f"must be a non-negative whole number of cells, got {margin!r}")
     mask = g.known()

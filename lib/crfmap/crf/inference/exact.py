@@ -8,7 +8,7 @@ import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.grid import check_probability_array
-from crfmap.crf.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table, is_symmetric, link_unary
+from crfmap.crf.model.potentials import check_pairing, check_table, DEFAULT_HIDDEN, DEFAULT_LINK, is_symmetric, link_unary
 
 MAX_CELLS = 22
 

@@ -4,7 +4,7 @@ A dispatcher needs compiling when it has no compiled signature in this process a
 on-disk cache holds no entry for its current source. Checking costs one small file read per
 dispatcher, once per process.
 
->>> from crfmap.crf import _lbp_kernels as K
+>>> from crfmap.crf.inference import _plain_kernels as K
 >>> isinstance(needs_compiling(K._beliefs), bool)
 True
 """
@@ -39,25 +39,27 @@ def announce(*dispatchers, stream=None) -> bool:
 
 
 def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fused: bool = False) -> bool:
-    """:func:`announce` for the kernels one :func:`crfmap.crf.lbp.infer` call on ``cells`` cells runs.
+    """:func:`announce` for the kernels one :func:`crfmap.crf.inference.lbp.infer` call on ``cells`` cells runs.
 
-    ``fused``: the call packs with the first half-sweep (:meth:`crfmap.crf.packed.PackedBlock.start_uniform`)
+    ``fused``: the call packs with the first half-sweep (:meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform`)
     instead of filling and packing the planes apart.
     """
-    from crfmap.crf import _lbp_fast as F
-    from crfmap.crf import _lbp_kernels as K
-    from crfmap.crf import packed as P
+    from crfmap.crf.engine import _layout as L
+    from crfmap.crf.engine import _message_update as F
+    from crfmap.crf.engine import messages as M
+    from crfmap.crf.engine import packed as P
+    from crfmap.crf.inference import _plain_kernels as K
 
     key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1, fused)
     if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
         return False  # uncompiled: say it once per process, not on every call
     if fast:  # the kernels every such call runs
-        kernels = ((P._pack_start,) if fused else (P._fill_ones, P._pack_unary)) + (P._beliefs_packed, F._tile_max)
+        kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._tile_max)
         kernels += (F._pass_parallel,) if key[2] else (F._pass_serial,)
     else:
         kernels = {"checkerboard": (K._checkerboard_iteration,), "flooding": (K._flooding_iteration,),
                    "sweep": (K._sweep_iteration,), "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
-        kernels += (K._beliefs,)
+        kernels += (M._beliefs,)
     said = announce(*kernels)
     if said:
         _announced.add(key)

@@ -1,4 +1,7 @@
-"""Named CRF configurations: the thesis's tables, and the recommended certainty-scaled model.
+"""Named CRF configurations, the one source of settings: the thesis's tables, the recommended certainty-scaled model, custom tables.
+
+:data:`DEFAULT_PRESET` is what ``crfmap infer`` and ``crfmap evaluate`` run unless told
+otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask for.
 
 - ``"thesis"``: the thesis's defaults, hidden [[10, 1], [1, 10]] and the identity link,
   over the whole grid. Its coupling J = ln(10) / 2 = 1.15 is far above the square lattice's
@@ -19,7 +22,7 @@
 The per-cell strength needs no kernel change: it is a per-cell link table
 ``[[w, 1], [1, w]]`` with ``w = exp(|l|)`` applied to the hard observation
 ``o = (x > 0)``, and such a table turns that observation into exactly the probability
-``sigmoid(l)`` (:func:`crfmap.crf.potentials.link_unary`), which LBP takes with the identity link.
+``sigmoid(l)`` (:func:`crfmap.crf.model.potentials.link_unary`), which LBP takes with the identity link.
 
 A map file holds P, not counts. The preset then reads the thesis's model backwards,
 ``x = tan(pi (P - 0.5))``: exact for grids crfmap builds (P = 0.5 + atan(x) / pi), and
@@ -40,10 +43,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.regions import near_known
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
 from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
 
 CRITICAL_COUPLING = math.log(1 + math.sqrt(2)) / 2  # square-lattice Ising, J_c = 0.4407
-DEFAULT_PRESET = "certainty"
+DEFAULT_PRESET = "certainty"  # what crfmap infer / evaluate run by default (the recommended preset below)
 
 
 def coupling_table(coupling: float) -> np.ndarray:
@@ -65,8 +72,6 @@ def table_coupling(hidden) -> float:
     >>> round(table_coupling([[10, 1], [1, 10]]), 4)
     1.1513
     """
-    from crfmap.crf.potentials import check_table
-
     t = check_table(hidden, "hidden")
     if np.any(t <= 0):
         return float("inf")
@@ -92,11 +97,13 @@ class Preset:
     name: str
     purpose: str
     hidden: np.ndarray = field(repr=False)
-    scaled: bool  # True: certainty-scaled observations; False: the grid's P through the identity link
+    scaled: bool  # True: certainty-scaled observations (through the identity link); False: the grid's P through link
     occupied: tuple = (0.0, 0.0)  # log-odds of the first net hit, and of each further one
     free: tuple = (0.0, 0.0)  # the same for net passes
     limit: float = 0.0  # largest |log-odds| of one cell's observation
     margin: int | None = None  # infer only within this many cells of an observation (None: everywhere)
+    link: np.ndarray = field(default_factory=lambda: DEFAULT_LINK.copy(), repr=False)  # observation-cell table
+    pairing: str = "receiver"  # how a non-symmetric hidden table applies to an edge
 
     @property
     def coupling(self) -> float:
@@ -126,24 +133,19 @@ class Preset:
         """Cells LBP runs on: within ``margin`` cells of an observed cell (None: all)."""
         if self.margin is None:
             return None
-        from crfmap.crf.regions import near_known
-
         return near_known(np.where(np.asarray(observed, bool), 1.0, 0.5), int(self.margin))
 
     def refine(self, grid=None, hits=None, passes=None, **options):
         """Run LBP with this preset: on counts (``hits``, ``passes``) or on a grid's P.
 
-        Returns the :class:`~crfmap.crf.lbp.LBPResult`; outside :meth:`region` the beliefs are
+        Returns the :class:`~crfmap.crf.inference.result.LBPResult`; outside :meth:`region` the beliefs are
         the observation itself (0.5 where nothing was observed). ``options`` go to
-        :func:`crfmap.crf.lbp.infer` (``tol``, ``max_iter``, ...).
+        :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ...).
 
         >>> r = get_preset("certainty").refine(np.array([[0.5, 0.9, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]]))
         >>> r.converged, float(r.beliefs.probability[0, -1])
         (True, 0.5)
         """
-        from crfmap.crf.lbp import infer
-        from crfmap.grid import OccupancyGrid
-
         if grid is not None:
             g = grid if isinstance(grid, OccupancyGrid) else OccupancyGrid(np.asarray(grid, dtype=np.float64))
             if hits is not None or passes is not None:
@@ -158,7 +160,7 @@ class Preset:
             g = OccupancyGrid(unary)
         region = self.region(observed)
         options.setdefault("tol", 1e-5)
-        result = infer(g.with_probability(unary), self.hidden, np.eye(2), region=region, **options)
+        result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
         if region is not None:  # outside the region nothing was inferred: keep the observation
             result.beliefs = result.beliefs.with_probability(np.where(region, result.beliefs.probability, unary))
         return result
@@ -167,8 +169,7 @@ class Preset:
 PRESETS = {
     "thesis": Preset(
         "thesis", "the thesis's tables (hidden [[10,1],[1,10]], identity link, whole grid): reproduce the thesis; "
-        "ordered phase, erases thin walls and fills unseen space", np.array([[10.0, 1.0], [1.0, 10.0]]),
-        scaled=False),
+        "ordered phase, erases thin walls and fills unseen space", DEFAULT_HIDDEN, scaled=False),
     "certainty": Preset(
         "certainty", "recommended: certainty-scaled observations (link strength follows hits - passes), coupling "
         "below critical, LBP only near observations: improves real maps, keeps walls, leaves unexplored space unknown",
@@ -176,9 +177,21 @@ PRESETS = {
 }
 
 
-def get_preset(name: str) -> Preset:
+def get_preset(name: str = DEFAULT_PRESET) -> Preset:
     """The preset called ``name`` (see :data:`PRESETS`)."""
     try:
         return PRESETS[name]
     except KeyError:
         raise InputError("preset", f"must be one of {', '.join(PRESETS)}, got {name!r}") from None
+
+
+def custom_preset(hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, pairing="receiver", margin=None) -> Preset:
+    """A preset of given tables: the grid's P through ``link``, LBP within ``margin`` cells of an observation.
+
+    >>> custom_preset("4,1,1,4", margin=3).coupling.__round__(4), custom_preset().name
+    (0.6931, 'custom')
+    """
+    if margin is not None and not (isinstance(margin, (int, np.integer)) and margin >= 0):
+        raise InputError("margin", f"must be None or a non-negative whole number of cells, got {margin!r}")
+    return Preset("custom", "given tables", check_table(hidden, "hidden"), scaled=False, margin=margin,
+                  link=check_table(link, "link"), pairing=check_pairing(pairing))

@@ -1,4 +1,4 @@
-"""What :func:`crfmap.crf.lbp.infer` returns: beliefs, messages (unpacked on first read) and diagnostics."""
+"""What :func:`crfmap.crf.inference.lbp.infer` returns: beliefs, messages (unpacked on first read) and diagnostics."""
 from __future__ import annotations
 
 import copy

@@ -1,6 +1,9 @@
-"""Fast checkerboard LBP: odds-ratio messages, red/black planes, temporal blocking (private).
+"""The message update of the fast engine: checkerboard LBP kernels on odds-ratio red/black planes (private).
 
-Same schedule and fixed point as :func:`crfmap.crf._lbp_kernels._checkerboard_iteration`
+A cell's four messages are computed in :func:`_four_unclamped` / :func:`_four`, a row of one colour
+sends in :func:`_send`, and a pass of several iterations (temporal blocking) is :func:`_pass_serial`
+or :func:`_pass_parallel`, the only kernels Python calls to iterate. Same schedule and fixed
+point as :func:`crfmap.crf.inference._plain_kernels._checkerboard_iteration`
 (cells with (x + y) even send, then the others), laid out for SIMD and for cache:
 
 - **Odds, not probabilities.** A binary message is one odds ratio r = P/(1-P). The cavity odds
@@ -8,7 +11,7 @@ Same schedule and fixed point as :func:`crfmap.crf._lbp_kernels._checkerboard_it
   sends through a table t (rows receiver, columns sender) is
   ``r' = (t00 R + t01) / (t10 R + t11)``: three multiplies, two FMAs and one division, where
   the probability form needs twice the multiplies. The division is the bottleneck (4 per cell).
-- **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`._lbp_kernels`) of
+- **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`crfmap.crf.engine.messages`) of
   the cell in row y with colour c = (x + y) & 1 and x = 2k + ((y + c) & 1). A colour's cells
   are then contiguous: a half-sweep is a unit-stride loop that vectorises. Row 0 / H + 1 and
   column 0 / last are ghosts that absorb messages sent off the grid.
@@ -23,7 +26,7 @@ Same schedule and fixed point as :func:`crfmap.crf._lbp_kernels._checkerboard_it
 
 ``act`` (bounded LBP) holds 1 where a cell may send; ``lo_k, hi_k`` bound the plane indices
 of each row's active cells so a small region costs little. The arrays and the Python driver
-live in :mod:`crfmap.crf.packed`.
+live in :mod:`crfmap.crf.engine.packed`.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Numba kernels of loopy belief propagation on a 4-connected binary lattice (private).
+"""The plain schedules' message updates: numba kernels of LBP on a 4-connected binary lattice (private).
 
-Data layout (checked and prepared by :mod:`crfmap.crf.lbp`):
+Data layout (checked and prepared by :mod:`crfmap.crf.inference.schedules`):
 
 - ``unary[y, x]``: P(occupied) the observed layer tells each hidden cell, floored.
 - ``msg[d, y, x]``: the message arriving at cell (y, x) that travelled in direction d
@@ -193,18 +193,6 @@ def _pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)
             msg[3, y, x] = m
             change = max(change, abs(m - old))
     return change
-
-
-@njit(parallel=True, cache=True)
-def _beliefs(unary, msg, out):
-    """P(occupied) of every hidden cell: its observation times its four incoming messages."""
-    h, w = unary.shape
-    for y in prange(h):
-        for x in range(w):
-            u = unary[y, x]
-            a = u * msg[0, y, x] * msg[1, y, x] * msg[2, y, x] * msg[3, y, x]
-            b = (1.0 - u) * (1.0 - msg[0, y, x]) * (1.0 - msg[1, y, x]) * (1.0 - msg[2, y, x]) * (1.0 - msg[3, y, x])
-            out[y, x] = a / (a + b)
 
 
 @njit(cache=True)

@@ -4,7 +4,7 @@ An observed cell with P(occupied) exactly 0 or 1 makes its hidden cell certain w
 table gives the other hidden state zero weight (identity link: P in {0, 1}). A link with no
 zero entry never makes a cell certain, nor does a P strictly inside (0, 1) (no row of a table
 is all zero). A certain cell's exact marginal is 0 or 1 whatever its neighbours are, so
-:func:`crfmap.crf.lbp.infer` *clamps* it: its belief is exactly its state and it sends, every
+:func:`crfmap.crf.inference.lbp.infer` *clamps* it: its belief is exactly its state and it sends, every
 iteration, the message that state implies (the table's column for it, normalised). It is
 never updated, so no floor on its observation lets neighbours overturn it.
 
@@ -17,7 +17,7 @@ certain of the other). On a chain this is arc consistency, which finds every cer
 every contradiction; on a loopy grid it may miss some (then the floors keep LBP finite).
 
 >>> import numpy as np
->>> from crfmap.crf.potentials import directional_tables
+>>> from crfmap.crf.model.potentials import directional_tables
 >>> certain_states(np.array([[1.0, 0.5, 0.0]]), [[1, 0], [0, 1]], directional_tables([[10, 1], [1, 10]])).tolist()
 [[1, -1, 0]]
 """
@@ -28,7 +28,7 @@ from numba import njit, prange
 
 from crfmap.errors import InputError
 
-FREE = -1  # state of a cell that is not certain (1 occupied, 0 empty)
+UNCERTAIN = -1  # state of a cell that is not certain (1 certainly occupied, 0 certainly empty)
 SHOWN = 3  # cells named in a contradiction message at most
 
 # (dy, dx) of the neighbour each message direction reaches: east, west, north (+y), south (-y)
@@ -37,7 +37,7 @@ _STEPS = np.array([[0, 1], [0, -1], [1, 0], [-1, 0]], np.int64)
 
 @njit(parallel=True, cache=True)
 def _certain_from_observations(prob, link, out):
-    """1 / 0 where the link makes a cell certainly occupied / empty, FREE elsewhere; returns the count."""
+    """1 / 0 where the link makes a cell certainly occupied / empty, UNCERTAIN elsewhere; returns the count."""
     h, w = prob.shape
     counts = np.zeros(h, np.int64)
     for y in prange(h):
@@ -77,7 +77,7 @@ def _propagate(state, forced, senders, use_senders, steps):
     """Unit propagation of certainty through hidden tables with zeros (depth first, in place).
 
     ``forced[d, s]`` is the state a receiver of a direction-d message from a sender certain in
-    ``s`` must take (FREE: none; -2: the sender's state is impossible next to any neighbour).
+    ``s`` must take (UNCERTAIN: none; -2: the sender's state is impossible next to any neighbour).
     Returns (flat index of a contradicting cell, of the certain neighbour that forces it), or (-1, -1).
     """
     h, w = state.shape
@@ -172,9 +172,9 @@ def implied_messages(tables) -> np.ndarray:
     return np.array([[_column(t, s)[0] for s in (0, 1)] for t in np.asarray(tables)], np.float64)
 
 
-def _forced(tables) -> np.ndarray:
-    """``forced[d, s]``: the state the receiver must take (FREE if none, -2 if the sender's state is impossible)."""
-    out = np.full((4, 2), FREE, np.int64)
+def forced_states(tables) -> np.ndarray:
+    """``forced[d, s]``: the state the receiver must take (UNCERTAIN if none, -2 if the sender's state is impossible)."""
+    out = np.full((4, 2), UNCERTAIN, np.int64)
     for d, t in enumerate(np.asarray(tables)):
         for s in (0, 1):
             col = _column(t, s)[1]
@@ -188,20 +188,20 @@ def _forced(tables) -> np.ndarray:
 
 
 def certain_states(probability, link, tables, senders=None, name="grid"):
-    """Per cell 1 (certainly occupied), 0 (certainly empty) or FREE (-1), as int8 [y, x]; None if none is certain.
+    """Per cell 1 (certainly occupied), 0 (certainly empty) or UNCERTAIN (-1), as int8 [y, x]; None if none is certain.
 
-    ``tables`` are the four directional tables (:func:`crfmap.crf.potentials.directional_tables`);
+    ``tables`` are the four directional tables (:func:`crfmap.crf.model.potentials.directional_tables`);
     certainty spreads only from cells in ``senders`` (a boolean mask, None: all). Raises
     :class:`InputError` (naming ``name`` and the cell) on contradictory hard evidence.
     """
     prob = np.ascontiguousarray(probability, dtype=np.float64)
     link = np.asarray(link, np.float64).ravel()
-    forced = _forced(tables)
+    forced = forced_states(tables)
     if not np.any(forced == -2) and _count_certain_observations(prob, link) == 0:
         return None  # the common case: no state array (a full-size write into fresh memory)
     state = np.empty(prob.shape, np.int8)
     n = _certain_from_observations(prob, link, state)
-    if np.any(forced != FREE):
+    if np.any(forced != UNCERTAIN):
         use = senders is not None
         mask = np.ascontiguousarray(senders, dtype=np.bool_) if use else np.ones((1, 1), np.bool_)
         bad, by = _propagate(state, forced, mask, use, _STEPS)

@@ -1,27 +1,21 @@
 """Coarse-to-fine start for LBP: solve a 2x downsampled grid, upsample its messages as the warm start.
 
-``infer(grid, init="coarse")`` (:func:`crfmap.crf.lbp.infer`) halves the grid (the log-odds of
+``infer(grid, init="coarse")`` (:func:`crfmap.crf.inference.lbp.infer`) halves the grid (the log-odds of
 P(occupied) of each 2x2 block summed: the block's evidence as one cell's) recursively down to
 about :data:`COARSE_MIN_SIDE` cells a side, runs LBP there from uniform messages, and hands
 every finer level the coarser level's converged messages, each fine cell taking the message its
 coarse cell received from the same direction.
 
-What it is and is not (measured on the noisy office floor, float32, 2 threads; see
-``tests/crf/test_multiscale.py`` and the ``converge-start`` row of ``crfmap bench``):
+What it is and is not (measured in ``tests/crf/test_multiscale.py``, the ``converge-start`` row of
+``crfmap bench`` and notebook 09; the numbers live there):
 
 - Where LBP has a single fixed point (weak couplings such as [[2, 1], [1, 2]] or the certainty
-  preset's J = 0.35), the start changes only the path: the beliefs equal the uniform start's
-  (to 1e-4 in the tests, at tol = 1e-7).
+  preset's J = 0.35), the start changes only the path: the beliefs equal the uniform start's.
 - In the ordered phase ([[10, 1], [1, 10]]) LBP has several fixed points and the start picks
-  one: at 4096² the coarse start reached a fixed point with 99.76 % of the cells on the same
-  side of 0.5 as the uniform start's (mean belief 0.053 against 0.055), after 544 fine
-  iterations against 817, but the coarse levels cost more than they saved (3.8 s against
-  1.4-2.5 s in total). The mean of P as the coarse observation (tried first) needed only 16 fine
-  iterations (1.9 s in total) but reached the all-empty fixed point (94.5 % on the same side,
-  mean belief 0.0001: the walls gone), so it is not used. Which of these fixed points has the
-  lower Bethe free energy was not computed.
-- It does not reach the 1 s goal for 4096²: the coarse levels themselves converge slowly in
-  the ordered phase.
+  one: on the noisy office floor the coarse start reaches one with nearly all cells on the same
+  side of 0.5 as the uniform start's, in fewer fine iterations, but the coarse levels cost more
+  than they save. The mean of P as the coarse observation (tried first) reaches the all-empty
+  fixed point (the walls gone), so it is not used.
 
 >>> import numpy as np
 >>> downsample(np.array([[0.0, 1.0, 0.9], [1.0, 0.0, 0.5]])).round(3).tolist()
@@ -73,7 +67,7 @@ def coarse_messages(probability, solve, min_side=COARSE_MIN_SIDE):
     """Warm-start messages for ``probability`` from its coarser levels, or None if it is too small to halve.
 
     ``solve(probability, messages)`` runs LBP on one level (``messages`` None: uniform start)
-    and returns its result (an :class:`crfmap.crf.lbp.LBPResult`). Returns (messages, the
+    and returns its result (an :class:`crfmap.crf.inference.result.LBPResult`). Returns (messages, the
     coarse levels' results, coarsest first).
     """
     n = levels(np.shape(probability), min_side)

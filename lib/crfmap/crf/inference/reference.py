@@ -2,7 +2,7 @@
 
 Pure Python, explicit two-state messages ``m[x_receiver]`` (unnormalised products, then
 normalised), a dictionary of directed edges, synchronous (flooding) updates: slow and obviously
-correct. It shares no code with :mod:`crfmap.crf._lbp_kernels`; the tests and the toolbox comparison
+correct. It shares no code with :mod:`crfmap.crf.inference._plain_kernels`; the tests and the toolbox comparison
 (notebook 04) use it as the independent implementation.
 """
 from __future__ import annotations

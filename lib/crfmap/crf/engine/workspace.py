@@ -1,8 +1,8 @@
-"""Reusable buffers for :func:`crfmap.crf.lbp.infer` on large grids: no fresh memory per call.
+"""Reusable buffers for :func:`crfmap.crf.inference.lbp.infer` on large grids: no fresh memory per call.
 
 Writing into freshly allocated memory costs a page fault per page (in a virtual machine far
-more than the write itself): at 8192² an ``infer`` call allocated ~28 bytes per cell and spent
-longer faulting them in than iterating. The whole-grid fast path therefore takes its packed
+more than the write itself): on large grids an ``infer`` call spent longer faulting its buffers in
+than iterating. The whole-grid fast path therefore takes its packed
 planes (20 bytes per cell in float32) and its float64 beliefs (8) from here: the buffers of the
 last call of that shape and dtype when nothing else holds them any more (the previous result was
 dropped), else new ones. Between calls the buffers of the last large grid stay allocated;
@@ -47,7 +47,7 @@ def beliefs_buffer(shape) -> np.ndarray:
 
 
 def packed_arrays(msg_shape, un_shape, dtype):
-    """(msg, un) planes for :class:`crfmap.crf.packed.PackedBlock` (contents undefined), reused when free."""
+    """(msg, un) planes for :class:`crfmap.crf.engine.packed.PackedBlock` (contents undefined), reused when free."""
     return _buffer("msg", msg_shape, dtype), _buffer("un", un_shape, dtype)
 
 

@@ -1,0 +1,124 @@
+"""The fast engine's one entry, :func:`solve`: pack a grid, iterate checkerboard LBP, unpack the result.
+
+Whole grid from uniform messages (the common call) costs one trip through memory before the
+iterations: :meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform` reads the observations
+once, writes the observation odds and the messages after the first half-sweep (so no ones-fill
+of the message planes), and counts on the way the cells a caller's grid check and the hard
+evidence need (:func:`fused_start_applies`). Warm starts, hard evidence and regions take the
+general path: uniform planes, then the unary, messages, clamps or the region's box (bounded LBP
+packs only the bounding box of the region plus a one-cell halo, the receivers).
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from crfmap.crf.engine.messages import MESSAGE_FLOOR, beliefs_from_messages, floored, initial_messages
+from crfmap.crf.engine.packed import PASS_ITERATIONS, PackedBlock, plane_width
+from crfmap.crf.engine.workspace import beliefs_buffer, packed_arrays
+from crfmap.crf.model.evidence import certain_states, clamp_messages, forced_states, implied_messages
+from crfmap.crf.model.potentials import link_unary
+from crfmap.grid import check_probability_array
+
+
+class EngineResult(NamedTuple):
+    """What :func:`solve` returns."""
+
+    beliefs: np.ndarray  # float64 [y, x] P(occupied), certain cells not yet set to their state
+    messages: np.ndarray | Callable  # (4, H, W) probability messages, or a function unpacking them on first read
+    changes: list  # the largest message change per iteration (NaN where not measured)
+    timings: dict  # seconds of "pack", "iterate", "unpack" (whole grid only; else empty)
+    states: np.ndarray | None  # the certain cells (crfmap.crf.model.evidence), found while packing when fused
+
+
+def fused_start_applies(grid, tables, max_iter, block, region, messages) -> bool:
+    """Whether :func:`solve` may pack ``grid`` with the first half-sweep and check it on the way:
+    a C-ordered float64 2-D array, whole grid, uniform start, a first pass of >= 2 iterations,
+    and tables under which no observation-free certainty exists."""
+    return (isinstance(grid, np.ndarray) and grid.dtype == np.float64 and grid.ndim == 2 and grid.size > 0
+            and grid.flags.c_contiguous and region is None and messages is None and min(max_iter, block) >= 2
+            and not np.any(forced_states(tables) == -2))
+
+
+def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, messages=None, states=None,
+          fused=False, block=PASS_ITERATIONS, freeze=None, floor=MESSAGE_FLOOR) -> EngineResult:
+    """Checkerboard LBP on the fast kernels.
+
+    ``prob``: float64 [y, x] observations; ``tables``: the four directional tables; ``region``:
+    the senders or None (whole grid); ``messages``: a warm start or None; ``states``: the
+    certain cells (:mod:`crfmap.crf.model.evidence`) or None; ``block``, ``freeze``: as in
+    :meth:`crfmap.crf.engine.packed.PackedBlock.run`. With ``fused`` (see
+    :func:`fused_start_applies`; ``states`` not computed yet) ``prob`` is checked here: a bad
+    grid raises :class:`crfmap.errors.InputError`, certain cells take the general path, and the
+    returned ``states`` are the ones found.
+    """
+    shape = prob.shape
+    t = [time.perf_counter()]
+    if region is not None:
+        msg, packed, corner = _bounded_block(prob, tables, link, floor, region, messages, dtype, states)
+        changes = ([0.0] if max_iter > 0 else []) if packed is None else \
+            packed.run(max_iter, tol, threads, block=block, freeze=freeze)
+        if packed is not None:
+            packed.messages(msg, *corner)
+        unary = np.clip(link_unary(prob, link), floor, 1.0 - floor)
+        return EngineResult(beliefs_from_messages(unary, msg), msg, changes, {}, states)
+    packed, states = _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fused)
+    t.append(time.perf_counter())
+    changes = (packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if messages is not None else block)
+               if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
+    t.append(time.perf_counter())
+    beliefs = packed.beliefs(beliefs_buffer(shape))
+    packed.un = None  # the result keeps only the packed messages
+    # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
+    msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731
+                                  clamp_messages(states, tables, initial_messages(shape, dtype)))
+    t.append(time.perf_counter())
+    return EngineResult(beliefs, msg, changes, dict(zip(("pack", "iterate", "unpack"), np.diff(t).tolist())), states)
+
+
+def _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fused):
+    """The packed whole grid, ready to iterate, and the certain cells (found while packing when ``fused``)."""
+    shape = prob.shape
+    wp = plane_width(shape[1])  # buffers of the last call of this shape when free: no page faults
+    arrays = packed_arrays((2, 4, shape[0] + 2, wp), (2, shape[0] + 2, wp), dtype)
+    packed = PackedBlock(shape[0], shape[1], dtype, tables, floor, arrays, fill=not fused)
+    if fused:
+        bad, certain = packed.start_uniform(prob, link, threads)
+        if bad:
+            check_probability_array(prob, "grid")  # raises, naming what is wrong
+            raise AssertionError("the packing's grid check and check_probability_array disagree")
+        if not certain:
+            return packed, states
+        # hard evidence: the general path, which may then reuse these buffers
+        packed = arrays = None
+        states = certain_states(prob, link, tables)
+        return _whole_block(prob, tables, link, floor, None, dtype, threads, states, False)
+    packed.set_unary(prob, link)
+    if messages is not None:
+        packed.set_messages(np.ascontiguousarray(messages))
+    if states is not None:
+        packed.clamp(states, implied_messages(tables))
+    return packed, states
+
+
+def _bounded_block(prob, tables, link, floor, active, messages, dtype, states):
+    """(the whole grid's probability messages, the packed box around the senders or None if there are none,
+    the box's lower-left cell (y0, x0))."""
+    shape = prob.shape
+    msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, floor)
+    if states is not None:
+        clamp_messages(states, tables, msg, active)
+        active = active & (states < 0)
+    rows = np.flatnonzero(active.any(axis=1))
+    if not rows.size:
+        return msg, None, (0, 0)
+    cols = np.flatnonzero(active.any(axis=0))
+    y0, y1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, shape[0])
+    x0, x1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, shape[1])
+    packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, floor)
+    packed.set_unary(prob, link, y0, x0)
+    packed.set_messages(msg, y0, x0)
+    packed.set_mask(active, y0, x0)
+    return msg, packed, (y0, x0)

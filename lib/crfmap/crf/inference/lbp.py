@@ -1,0 +1,218 @@
+"""Loopy belief propagation on an occupancy grid's CRF (thesis sec. 2.6, 3.3, 3.4): :func:`infer`.
+
+The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one
+observed node per cell holding the grid's P(occupied), which sends its hidden node one message
+through ``link``. :func:`infer` checks its input, finds the hard evidence
+(:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on the
+schedule asked for (:mod:`crfmap.crf.inference.schedules`) and returns the beliefs P(occupied)
+as a grid plus the convergence diagnostics (:class:`~crfmap.crf.inference.result.LBPResult`).
+
+Kernels: the checkerboard schedule (without damping) runs on the fast engine of
+:mod:`crfmap.crf.engine` (:func:`crfmap.crf.engine.solve.solve`): messages as odds ratios in
+red/black planes, float32 SIMD, several iterations per trip through memory. It gives the plain
+kernel's iterations (to rounding) but measures the largest message change only on the last
+iteration of each pass of up to ``block`` iterations (passes grow 1, 2, 4, ... so a warm start
+still stops at once); the other entries of ``max_change`` are NaN, and a run may do up to
+``block - 1`` iterations more than the plain kernel before it sees ``tol``. On large grids,
+settled tiles pause (``Checkerboard(freeze=...)``). The other schedules, and
+``Checkerboard(kernel="plain")``, run the plain kernels of :mod:`crfmap.crf.inference._plain_kernels`.
+
+Bounded LBP (sec. 3.4.4): pass ``region`` (a boolean [y, x] mask, e.g. from
+:func:`crfmap.crf.inference.regions.disc_region`): only cells in it send messages; every other
+message keeps its value (warm-start ``messages`` to carry them between calls). Cells outside a
+region never influence anything unless they sent messages before.
+"""
+from __future__ import annotations
+
+import time
+import numpy as np
+
+from crfmap.crf.engine import solve as engine
+from crfmap.crf.engine.messages import MESSAGE_FLOOR, check_messages
+from crfmap.crf.engine.packed import PASS_ITERATIONS, fast_tables_ok
+from crfmap.crf.inference import _plain_kernels as K
+from crfmap.crf.inference.compiling import announce_lbp
+from crfmap.crf.inference.multiscale import COARSE_TOL_FACTOR, INITS, coarse_messages
+from crfmap.crf.inference.result import LBPResult, result_grid
+from crfmap.crf.inference.schedules import run_schedule, schedule_settings
+from crfmap.crf.model.evidence import certain_states, clamp_beliefs
+from crfmap.crf.model.potentials import (
+    DEFAULT_HIDDEN,
+    DEFAULT_LINK,
+    check_pairing,
+    check_table,
+    directional_tables,
+    message_coefficients,
+)
+from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid, as_grid
+
+
+def message(table, sender_p) -> float:
+    """P(receiver occupied) of one message through a 2x2 table from a sender at P(occupied) = sender_p.
+
+    Thesis eq. 1 / Table 1:
+
+    >>> round(message([[0.9, 0.1], [0.1, 0.9]], 0.8), 6)
+    0.74
+    """
+    t = check_table(table, "table")
+    c = message_coefficients(t[None])[0]
+    p = float(sender_p)
+    if not 0.0 <= p <= 1.0:
+        raise InputError("sender_p", f"must be a probability in [0, 1], got {sender_p!r}")
+    return float(K._message(p, 0.5, 0.5, 0.5, c[0], c[1], c[2], c[3], 0.0, 0.0, 0.0))
+
+
+_BARE_GRID = OccupancyGrid(np.zeros((1, 1)))  # default metadata, for arrays checked while packed
+
+
+def infer(
+    grid,
+    hidden=DEFAULT_HIDDEN,
+    link=DEFAULT_LINK,
+    *,
+    schedule="checkerboard",
+    max_iter: int = 1000,
+    tol: float = 1e-5,
+    region=None,
+    messages=None,
+    pairing: str = "receiver",
+    dtype=np.float64,
+    threads: int | None = None,
+    init: str = "uniform",
+) -> LBPResult:
+    """Run loopy belief propagation on a grid's CRF.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid or 2-D array of P(occupied) in [0, 1], indexed [y, x]
+    hidden, link : 2x2 tables (rows C1 C0, columns N1 N0); see :mod:`crfmap.crf.model.potentials`
+    schedule : "checkerboard", "flooding", "sweep", "thesis", or their settings
+        (:class:`~crfmap.crf.inference.schedules.Checkerboard` ``(kernel, damping, block, freeze)``,
+        ``Flooding(damping)``, ``Sweep(damping)``, ``Thesis(start, damping)``): options that
+        apply to one schedule only live in its settings.
+    max_iter : int
+        Stop after this many iterations (the thesis used 2 with ``schedule="thesis"``).
+    tol : float
+        Stop once the largest message change of an iteration is below ``tol``.
+    region : boolean [y, x] mask or None
+        Bounded LBP: only these cells send messages.
+    messages : (4, H, W) array or None
+        Warm start (e.g. ``previous_result.messages``); uniform when None.
+    pairing : "receiver" (thesis) or "oriented" (proper pairwise CRF for non-symmetric tables)
+    dtype : np.float64 or np.float32
+    threads : int or None
+        Numba threads for the parallel schedules (None: numba's default).
+    init : "uniform" or "coarse"
+        Start messages when ``messages`` is None: uniform, or coarse-to-fine
+        (:mod:`crfmap.crf.inference.multiscale`: the grid halved recursively, each level solved
+        with these arguments and its messages upsampled as the next level's warm start). Same
+        fixed point where LBP has one; in the ordered phase it may reach another. ``seconds``
+        includes the coarse levels (also ``timings["coarse"]``); ``iterations`` counts the
+        full grid's only.
+
+    Returns
+    -------
+    LBPResult
+
+    Examples
+    --------
+    >>> r = infer(np.array([[0.9, 0.5, 0.9]]), max_iter=50, tol=1e-9)
+    >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
+    (True, True)
+    """
+    settings = schedule_settings(schedule)
+    hidden = check_table(hidden, "hidden")
+    link = check_table(link, "link")
+    pairing = check_pairing(pairing)
+    dtype = np.dtype(dtype)
+    if dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
+        raise InputError("dtype", f"must be float32 or float64, got {dtype}")
+    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 0):
+        raise InputError("max_iter", f"must be a non-negative integer, got {max_iter!r}")
+    if not (np.isfinite(tol) and tol >= 0):
+        raise InputError("tol", f"must be a non-negative number, got {tol!r}")
+    freeze = getattr(settings, "freeze", None)
+    if freeze is not None and not (freeze < tol or freeze == 0):
+        raise InputError("freeze", f"must be None or a number in [0, tol), got {freeze!r}")
+    if threads is not None and not (isinstance(threads, (int, np.integer)) and threads >= 1):
+        raise InputError("threads", f"must be a positive integer or None, got {threads!r}")
+    if init not in INITS:
+        raise InputError("init", f"must be one of {', '.join(INITS)}, got {init!r}")
+    if init == "coarse" and (messages is not None or region is not None):
+        raise InputError("init", '"coarse" starts the whole grid without messages: drop messages= and region=')
+    tables = directional_tables(hidden, pairing)
+    use_fast = settings.uses_engine and fast_tables_ok(tables)
+    if settings.uses_engine and settings.kernel == "fast" and not use_fast:
+        raise InputError("kernel", "the fast kernels need east/north and west/south to share a table")
+    block = PASS_ITERATIONS if getattr(settings, "block", None) is None else settings.block
+    # the common call (a float64 array, whole grid, uniform start) is checked while it is packed
+    given = isinstance(grid, OccupancyGrid)  # checked when made; an array is checked while packed (fused)
+    fused = use_fast and init == "uniform" and engine.fused_start_applies(
+        grid.probability if given else grid, tables, max_iter, block, region, messages)
+    g = result_grid(_BARE_GRID, grid) if fused and not given else as_grid(grid)
+    coarse_seconds = None
+    if init == "coarse":
+        t0 = time.perf_counter()
+        messages, _ = coarse_messages(g.probability, lambda p, m: infer(
+            p, hidden, link, schedule=settings, max_iter=max_iter, tol=tol * COARSE_TOL_FACTOR, messages=m,
+            pairing=pairing, dtype=dtype, threads=threads))
+        coarse_seconds = time.perf_counter() - t0 if messages is not None else None
+
+    shape = g.shape
+    if messages is not None:
+        messages = check_messages(messages, shape)
+    active = None
+    if region is not None:
+        active = np.asarray(region)
+        if active.shape != shape:
+            raise InputError("region", f"mask shape {active.shape} does not match the grid {shape}")
+        active = active.astype(np.bool_, copy=False)
+    # hard evidence: certain cells are clamped (never updated, sending what their state implies)
+    states = None if fused else certain_states(g.probability, link, tables, active)  # fused: found while packing
+    sending = states if max_iter else None  # clamped cells send from the first iteration on
+    senders = active if sending is None else (sending < 0 if active is None else active & (sending < 0))
+
+    import numba
+
+    previous_threads = numba.get_num_threads()
+    n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
+    announce_lbp(use_fast, settings.name, g.probability.size, n_threads, bool(fused))
+    numba.set_num_threads(n_threads)
+    try:
+        t0 = time.perf_counter()
+        timings = {}
+        if use_fast:
+            prob = np.ascontiguousarray(g.probability, dtype=np.float64)
+            out = engine.solve(prob, tables, link, max_iter=max_iter, tol=tol, dtype=dtype, threads=n_threads,
+                               region=active, messages=messages, states=sending, fused=fused, block=block,
+                               freeze=freeze, floor=MESSAGE_FLOOR)
+            beliefs, msg, changes, timings = out.beliefs, out.messages, out.changes, out.timings
+            states = out.states if fused else states  # fused: the certain cells the packing found
+        else:
+            beliefs, msg, changes = run_schedule(settings, g.probability, tables, link, max_iter, tol, senders,
+                                                 messages, dtype, MESSAGE_FLOOR, (sending, active))
+        if states is not None:
+            clamp_beliefs(states, beliefs)
+        seconds = time.perf_counter() - t0 + (coarse_seconds or 0.0)
+    finally:
+        numba.set_num_threads(previous_threads)
+
+    max_change = np.asarray(changes, dtype=np.float64)
+    converged = bool(max_change.size and max_change[-1] < tol)
+    if not use_fast:  # the fast kernels' b / (1 + b) lies in [0, 1] already
+        np.clip(beliefs, 0.0, 1.0, out=beliefs)
+    if coarse_seconds is not None:
+        timings["coarse"] = coarse_seconds
+    return LBPResult(
+        beliefs=result_grid(g, beliefs),
+        iterations=len(max_change),
+        max_change=max_change,
+        converged=converged,
+        messages=msg,
+        seconds=seconds,
+        schedule=settings.name,
+        kernel="fast" if use_fast else "plain",
+        timings=timings,
+    )

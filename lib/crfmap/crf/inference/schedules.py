@@ -1,0 +1,199 @@
+"""LBP schedules, each with the settings that apply to it only, and the plain kernels that run them.
+
+Pass one as ``infer(grid, schedule=...)``: a name (its settings' defaults) or a settings object.
+
+- :class:`Checkerboard` (``"checkerboard"``, the default): red cells send, then black cells.
+  Parallel, in place, and in our runs convergent where flooding oscillates. Runs on the fast
+  engine (:mod:`crfmap.crf.engine`) unless ``kernel="plain"`` or ``damping`` asks for the plain one.
+- :class:`Flooding` (``"flooding"``): every message from the previous iteration's messages
+  (synchronous). Can oscillate on strong couplings; ``damping`` tames it.
+- :class:`Sweep` (``"sweep"``): four directional sweeps (thesis sec. 2.6.2): information
+  crosses the grid per sweep.
+- :class:`Thesis` (``"thesis"``): breadth-first from a corner cell, each visited cell pulling
+  fresh messages from its neighbours, in place (Listing 5); every iteration restarts from the
+  last cell visited (sec. 2.6.2). ``max_iter=2`` is the thesis's setting. One thread.
+
+``damping`` (0..1, the weight of the old message) applies to the plain kernels. An option given
+to a schedule or kernel it does not apply to is refused (:class:`crfmap.errors.InputError`).
+
+>>> Thesis(start="upper-left").name, Checkerboard().uses_engine
+('thesis', True)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from crfmap.crf.engine.messages import beliefs_from_messages, floored, initial_messages
+from crfmap.crf.inference import _plain_kernels as K
+from crfmap.crf.model.evidence import clamp_messages
+from crfmap.crf.model.potentials import link_unary, message_coefficients
+from crfmap.errors import InputError
+
+KERNELS = ("auto", "fast", "plain")
+CORNERS = ("lower-left", "lower-right", "upper-left", "upper-right")
+
+
+def _check_damping(damping):
+    if not (np.isfinite(damping) and 0.0 <= damping < 1.0):
+        raise InputError("damping", f"must be in [0, 1), got {damping!r}")
+
+
+@dataclass(frozen=True)
+class Checkerboard:
+    """Red cells send, then black ones.
+
+    kernel : "auto" (the fast engine unless ``damping``), "fast" or "plain"
+    damping : plain kernel only
+    block : int or None
+        Fast engine only: at most this many iterations per trip through memory (None:
+        :data:`crfmap.crf.engine.packed.PASS_ITERATIONS`); the message change is measured on the
+        last iteration of each pass, the others are NaN in ``max_change``.
+    freeze : float or None
+        Fast engine only: tiles (:data:`~crfmap.crf.engine.packed.TILE_ROWS` x
+        :data:`~crfmap.crf.engine.packed.TILE_COLS` cells) whose messages moved by at most this
+        stop iterating until a neighbouring tile moves; None means
+        :data:`~crfmap.crf.engine.packed.FREEZE` ``* tol``, 0 freezes only tiles that did not
+        move at all (exactly the plain iterations). Must be below ``tol`` (checked by ``infer``).
+        A run ends only after an iteration of every cell moved no message by ``tol``.
+    """
+
+    kernel: str = "auto"
+    damping: float = 0.0
+    block: int | None = None
+    freeze: float | None = None
+    name = "checkerboard"
+
+    def __post_init__(self):
+        if self.kernel not in KERNELS:
+            raise InputError("kernel", f"must be one of {', '.join(KERNELS)}, got {self.kernel!r}")
+        _check_damping(self.damping)
+        if self.kernel == "fast" and self.damping != 0.0:
+            raise InputError("damping", "the fast kernel runs without damping; use kernel='plain' (or 'auto')")
+        if self.block is not None and not (isinstance(self.block, (int, np.integer)) and self.block >= 1):
+            raise InputError("block", f"must be a positive integer, got {self.block!r}")
+        if self.freeze is not None and not (np.isfinite(self.freeze) and self.freeze >= 0):
+            raise InputError("freeze", f"must be None or a non-negative number below tol, got {self.freeze!r}")
+        if not self.uses_engine:
+            why = "kernel='plain'" if self.kernel == "plain" else "damping runs the plain kernel"
+            for option in ("block", "freeze"):
+                if getattr(self, option) is not None:
+                    raise InputError(option, f"applies to the fast kernel only ({why})")
+
+    @property
+    def uses_engine(self) -> bool:
+        """Whether this runs on the fast engine."""
+        return self.kernel != "plain" and self.damping == 0.0
+
+
+@dataclass(frozen=True)
+class Flooding:
+    """Every cell sends from the previous iteration's messages; ``damping`` in [0, 1)."""
+
+    damping: float = 0.0
+    name = "flooding"
+    uses_engine = False
+
+    def __post_init__(self):
+        _check_damping(self.damping)
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """Four directional sweeps per iteration; ``damping`` in [0, 1)."""
+
+    damping: float = 0.0
+    name = "sweep"
+    uses_engine = False
+
+    def __post_init__(self):
+        _check_damping(self.damping)
+
+
+@dataclass(frozen=True)
+class Thesis:
+    """The thesis's breadth-first pull schedule from the corner ``start`` (one of :data:`CORNERS`)."""
+
+    start: str = "lower-left"
+    damping: float = 0.0
+    name = "thesis"
+    uses_engine = False
+
+    def __post_init__(self):
+        if self.start not in CORNERS:
+            raise InputError("start", f"must be one of {', '.join(CORNERS)}, got {self.start!r}")
+        _check_damping(self.damping)
+
+
+SETTINGS = {s.name: s for s in (Checkerboard, Flooding, Sweep, Thesis)}
+SCHEDULES = tuple(SETTINGS)
+
+
+def schedule_settings(schedule):
+    """The settings object of ``schedule``: a name (its defaults) or a settings object, else InputError."""
+    if isinstance(schedule, tuple(SETTINGS.values())):
+        return schedule
+    if isinstance(schedule, str) and schedule in SETTINGS:
+        return SETTINGS[schedule]()
+    raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)} or their settings "
+                     f"(Checkerboard(...), ...), got {schedule!r}")
+
+
+def run_schedule(settings, probability, tables, link, max_iter, tol, senders, messages, dtype, floor, clamped):
+    """A plain schedule from start to end; returns (beliefs, messages, changes).
+
+    ``senders``: the cells that send or None (all); ``clamped``: (certain states or None, the
+    region or None).
+    """
+    shape = probability.shape
+    unary = np.clip(link_unary(probability, link), floor, 1.0 - floor).astype(dtype)
+    coef = message_coefficients(tables).astype(dtype)
+    msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, floor)
+    if clamped[0] is not None:
+        clamp_messages(clamped[0], tables, msg, clamped[1])
+    # the thesis's walk visits the region (clamped cells included); only senders send
+    walk = clamped[1]
+    if senders is None:
+        active = np.ones((1, 1), dtype=np.bool_)
+        use_active = False
+        y0, y1 = 0, shape[0]
+    else:
+        active = senders
+        use_active = True
+        rows = np.flatnonzero(active.any(axis=1))
+        y0, y1 = (int(rows[0]), int(rows[-1]) + 1) if rows.size else (0, 0)
+    floor = float(floor)
+    damping = float(settings.damping)
+    changes = []
+    schedule = settings.name
+    if schedule == "flooding":
+        new = msg.copy()
+    if schedule == "thesis":
+        corner = {"lower-left": (0, 0), "lower-right": (0, shape[1] - 1),
+                  "upper-left": (shape[0] - 1, 0), "upper-right": (shape[0] - 1, shape[1] - 1)}
+        sy, sx = corner[settings.start]
+        use_walk = walk is not None
+        walk = walk if use_walk else np.ones((1, 1), np.bool_)
+        if use_walk and not walk[sy, sx]:
+            cells = np.argwhere(walk)
+            if cells.size:
+                sy, sx = (int(v) for v in cells[0])
+    for _ in range(max_iter):
+        if schedule == "checkerboard":
+            c = K._checkerboard_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
+        elif schedule == "flooding":
+            c = K._flooding_iteration(unary, msg, new, coef, active, use_active, y0, y1, floor, damping)
+            msg, new = new, msg
+            new[...] = msg  # slots not written this round (inactive senders) keep their values
+        elif schedule == "sweep":
+            c = K._sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
+        else:
+            order = K._bfs_order(shape[0], shape[1], walk, use_walk, sy, sx)
+            c = K._pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)
+            if order.size:  # the next pass starts where this one ended (sec. 2.6.2)
+                sy, sx = divmod(int(order[-1]), shape[1])
+        changes.append(float(c))
+        if c < tol:
+            break
+    return beliefs_from_messages(unary, msg), msg, changes
