@@ -30,7 +30,7 @@ class Case:
     signal: int | None = None  # send this signal once a temporary file appears
     expect_rc: int = 2
     extra: dict = field(default_factory=dict)
-    entry: str = "crfmap"  # the command line: 'crfmap' (crfmap.cli) or 'reproduce' (crfmap.repro.reproduce)
+    entry: str = "crfmap"  # the command line: a key of harness.ENTRIES (crfmap, reproduce, run, warmup)
 
 
 CASES: list[Case] = []

@@ -152,6 +152,8 @@ _env_case("NUMBA_NUM_THREADS=0-reproduce", {"NUMBA_NUM_THREADS": "0"}, ["NUMBA_N
           subprocess=True)
 _env_case("NUMBA_NUM_THREADS=0-run", {"NUMBA_NUM_THREADS": "0"}, ["NUMBA_NUM_THREADS"], entry="run",
           argv=["nb.ipynb", "--output-root", "{d}/out"], subprocess=True)
+_env_case("NUMBA_NUM_THREADS=0-warmup", {"NUMBA_NUM_THREADS": "0"}, ["NUMBA_NUM_THREADS"], entry="warmup",
+          argv=["--jobs", "1"], subprocess=True)
 _env_case("NUMBA_CACHE_DIR-unwritable", {"NUMBA_CACHE_DIR": "/proc/crfmap-numba"}, ["NUMBA_CACHE_DIR"])
 _env_case("NUMBA_CACHE_DIR-a-file", {"NUMBA_CACHE_DIR": "{d}/in.npy"}, ["NUMBA_CACHE_DIR"])
 for _entry in ("reproduce", "crfmap"):

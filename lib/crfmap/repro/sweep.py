@@ -167,7 +167,8 @@ def load(path, max_points=None) -> Sweep:
     if not isinstance(fixed, dict):
         raise InputError(path, f"'fixed' must map parameters to values, got {type(fixed).__name__}")
     known = parameter_defaults(matches[0])
-    unknown = sorted(map(repr, (set(grid) | set(fixed)) - set(known)))
+    unknown = sorted(n if isinstance(n, str) and n.isidentifier() else repr(n)
+                     for n in (set(grid) | set(fixed)) - set(known))
     if unknown:
         raise InputError(path, f"{', '.join(unknown)} not in the parameters cell of {matches[0].name} "
                          f"(it has {', '.join(known)})")
