@@ -73,6 +73,8 @@ _sweep_case("int-for-bool-quick", _grid(DENOISING, quick="[1]"))
 _sweep_case("number-for-string-scene", _grid(EXPLORER, scene="[3]"))
 _sweep_case("mapping-value", _grid(DENOISING, noise="[{a: 1}]"))
 _sweep_case("nested-list-value", _grid(EXPLORER, radius="[[[1]]]"))
+_sweep_case("integer-too-large-for-a-float", _grid(DENOISING, noise=f"[1{'0' * 400}]"))
+_sweep_case("date-value", _grid(DENOISING, noise="[2020-01-01]"))
 _sweep_case("nan-value", _grid(DENOISING, noise="[.nan]"))
 _sweep_case("inf-value", _grid(DENOISING, noise="[.inf, 0.3]"))
 _sweep_case("nul-byte-value", _grid(EXPLORER, scene='["x\\0y"]'))
@@ -116,7 +118,15 @@ def _two_folders(d):
                 names=["--sweep"], env={"CRFMAP_OUTPUT_ROOT": str(Path(d) / "out")})
 
 
+def _same_name_twice(d):
+    for name in ("Noise", "noise"):
+        (Path(d) / f"{name}.yaml").write_text(_grid(DENOISING, noise="[0.3]"))
+    return dict(argv=["--sweep", str(Path(d) / "Noise.yaml"), str(Path(d) / "noise.yaml"), "--dry-run"],
+                names=["--sweep"], env={"CRFMAP_OUTPUT_ROOT": str(Path(d) / "out")})
+
+
 CASES.append(Case("sweep", "files-of-two-folders", _two_folders, entry="reproduce"))
+CASES.append(Case("sweep", "names-differ-only-in-case", _same_name_twice, entry="reproduce"))
 CASES.append(Case("sweep", "name-not-in-workflow-sweeps", lambda d: dict(
     argv=["--sweep", "no_such_sweep", "--dry-run"], names=["no_such_sweep"],
     env={"CRFMAP_OUTPUT_ROOT": str(Path(d) / "out")}), entry="reproduce"))

@@ -134,6 +134,11 @@ def _reproduce(args) -> int:
         if len({f.parent for f in files}) > 1:
             raise CrfmapError(f"--sweep: the sweep files must be in one folder, got {', '.join(map(str, files))}")
         loaded = [load(f, args.max_points) for f in files]
+        names = {}
+        for s in loaded:  # out/runs/<name>/: one folder on a case-insensitive file system
+            other = names.setdefault(s.name.casefold(), s)
+            if other is not s:
+                raise CrfmapError(f"--sweep: {other.source} and {s.source} would both write to out/runs/{s.name}/")
         todo += [s.notebook for s in loaded]
     missing = missing_data(todo)
     if missing:  # say it before anything runs, not after half the figures were regenerated

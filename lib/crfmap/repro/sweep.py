@@ -214,6 +214,8 @@ def _typed(path, name, value, default, where):
     if default is None:  # the notebook takes None or something else: any scalar or flat list
         return value
     if isinstance(default, float) and type(value) is int:  # noise: [1] means 1.0 (bools are not ints here)
+        if abs(value) > 1e300:  # float() would overflow; no notebook parameter is near
+            raise InputError(path, f"{name}: {str(value)[:40]}... is too large a number")
         return float(value)
     if type(value) is not type(default):
         raise InputError(path, f"{name}: {json.dumps(value)[:80]} is {_kind(value)}, but {name} = "
