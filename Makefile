@@ -44,9 +44,12 @@ reproduce:
 	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --started-at "$$(cat .reproduce-started)"
 	@rm -f .reproduce-started
 
-# make sweep SWEEP=04_noise   (workflow/sweeps/04_noise.yaml -> out/runs/04_noise/)
-sweep: warm
-	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --sweep $(SWEEP)
+# make sweep SWEEP=04_noise   (workflow/sweeps/04_noise.yaml -> out/runs/04_noise/; MAX_POINTS=N raises the
+# limit of 200 points). Without SWEEP it would be the whole reproduction: refused before anything runs.
+sweep:
+	@test -n "$(strip $(SWEEP))" || { echo "make sweep: give SWEEP=name (a file of workflow/sweeps/) or SWEEP=path.yaml" >&2; exit 2; }
+	$(MAKE) --no-print-directory warm
+	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --sweep $(SWEEP) $(if $(MAX_POINTS),--max-points $(MAX_POINTS))
 
 dry-run: $(STAMP)
 	$(BIN)/python -m crfmap.repro.reproduce --dry-run

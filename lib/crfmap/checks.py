@@ -97,21 +97,15 @@ MAX_TEXT_BYTES = 1 << 20  # a map YAML, sidecar or bag metadata.yaml is a few hu
 def max_cells() -> int:
     """The largest grid (in cells) an input may ask for: ``$CRFMAP_MAX_CELLS`` or 100 million.
 
+    The value is a whole number >= 1 (``4e8`` too); there is no "no limit" (``inf`` is refused).
+
     >>> max_cells() >= 1
     True
     """
-    import os
+    from crfmap.environment import number
 
-    text = os.environ.get(MAX_CELLS_ENV)
-    if not text:
-        return MAX_CELLS_DEFAULT
-    try:
-        value = int(float(text))
-    except ValueError:
-        raise InputError(MAX_CELLS_ENV, f"expected a number of cells, got {text!r}") from None
-    if value < 1:
-        raise InputError(MAX_CELLS_ENV, f"must be at least 1, got {text!r}")
-    return value
+    given = number(MAX_CELLS_ENV, "cells")
+    return MAX_CELLS_DEFAULT if given is None else given
 
 
 def check_cells(source, width, height, what="grid") -> int:

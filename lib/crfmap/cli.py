@@ -30,9 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="crfmap",
         description="Clean and complete occupancy grids with CRFs and loopy belief propagation.",
     )
-    parser.add_argument("--max-cells", type=float, default=None, metavar="N",
-                        help="largest grid an input may ask for, in cells (default 100 million; "
-                        "also $CRFMAP_MAX_CELLS)")
+    parser.add_argument("--max-cells", default=None, metavar="N",
+                        help="largest grid an input may ask for, in cells: a whole number such as 4e8 (default "
+                        "100 million; also $CRFMAP_MAX_CELLS; there is no 'no limit')")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in COMMANDS:
         try:
@@ -63,13 +63,21 @@ def _input_name(args) -> str:
 
 
 def main(argv=None) -> int:
+    from crfmap import environment
+
+    try:  # before the sub-commands import numba, which reads NUMBA_NUM_THREADS once and fails on 0
+        environment.check()
+    except CrfmapError as exc:
+        return _fail(f"crfmap: error: {exc}")
     parser = build_parser()
     args = parser.parse_args(argv)
     previous = os.environ.get("CRFMAP_MAX_CELLS")
     if args.max_cells is not None:
-        if not args.max_cells >= 1:
-            parser.error(f"--max-cells must be at least 1, got {args.max_cells:g}")
-        os.environ["CRFMAP_MAX_CELLS"] = str(int(args.max_cells))
+        try:
+            cells = environment.whole_number("--max-cells", args.max_cells, "cells")
+        except CrfmapError as exc:
+            parser.error(str(exc))
+        os.environ["CRFMAP_MAX_CELLS"] = str(cells)
     try:
         return _run(args)
     finally:  # main() may be called in-process (tests, notebooks): leave the environment as it was

@@ -12,20 +12,47 @@ Notebooks and commands never build paths from the working directory; they ask he
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
-from crfmap.errors import DataMissingError
+from crfmap import environment
+from crfmap.errors import DataMissingError, InputError
 
-PROJECT_ROOT = Path(os.environ.get("CRFMAP_ROOT", Path(__file__).resolve().parents[2]))
-NOTEBOOKS = PROJECT_ROOT / "notebooks"
-PAPER = PROJECT_ROOT / "paper"
-# Outputs go under the checkout unless CRFMAP_OUTPUT_ROOT points elsewhere (the tests do that,
-# so executing the notebooks in CI never touches the checkout's figures/).
-OUTPUT_ROOT = Path(os.environ.get("CRFMAP_OUTPUT_ROOT", PROJECT_ROOT))
-FIGURES = OUTPUT_ROOT / "figures"
-GENERATED = OUTPUT_ROOT / "paper" / "generated"
-OUT = OUTPUT_ROOT / "out"
+# PROJECT_ROOT, NOTEBOOKS, PAPER, OUTPUT_ROOT, FIGURES, GENERATED and OUT are read from the environment
+# at each use (module __getattr__ below), so a bad value is refused where it is read, in one line.
+_LAZY = {"PROJECT_ROOT": (), "NOTEBOOKS": ("notebooks",), "PAPER": ("paper",), "OUTPUT_ROOT": (),
+         "FIGURES": ("figures",), "GENERATED": ("paper", "generated"), "OUT": ("out",)}
+for _name in _LAZY:  # importlib.reload keeps old module attributes: a value a test once set must not stick
+    globals().pop(_name, None)
+
+
+def project_root() -> Path:
+    """The checkout: ``$CRFMAP_ROOT`` (an existing folder) or the folder holding ``lib/crfmap``."""
+    return environment.folder("CRFMAP_ROOT", Path(__file__).resolve().parents[2], must_exist=True)
+
+
+def output_root() -> Path:
+    """Where outputs go: ``$CRFMAP_OUTPUT_ROOT`` or the checkout. The tests set it, so executing the
+    notebooks in CI never touches the checkout's figures/."""
+    return environment.folder("CRFMAP_OUTPUT_ROOT", project_root())
+
+
+def __getattr__(name):
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    root = output_root() if name in ("OUTPUT_ROOT", "FIGURES", "GENERATED", "OUT") else project_root()
+    return root.joinpath(*_LAZY[name])
+
+
+def output_dir(folder) -> Path:
+    """``folder`` (under the output root) created if missing; InputError naming CRFMAP_OUTPUT_ROOT if it cannot be."""
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"CRFMAP_OUTPUT_ROOT={output_root()}",
+                         f"cannot create {folder} ({exc.strerror or exc})") from None
+    return folder
+
 
 # What each data file is and where to get it, for the error a user sees when it is missing.
 DATA_SOURCES = {
@@ -50,10 +77,8 @@ DATA_SOURCES = {
 
 def data_root() -> Path:
     """The folder holding the public data (``CRFMAP_DATA`` or ``../shared/data``)."""
-    env = os.environ.get("CRFMAP_DATA")
-    if env:
-        return Path(env).expanduser().resolve()
-    return (PROJECT_ROOT.parent / "shared" / "data").resolve()
+    given = environment.folder("CRFMAP_DATA")
+    return (given or project_root().parent / "shared" / "data").resolve()
 
 
 def data_file(relative: str) -> Path:
@@ -80,5 +105,6 @@ def have_data(relative: str) -> bool:
 
 def ensure_output_dirs() -> None:
     """Create the output folders (figures, generated tables, run outputs)."""
-    for folder in (FIGURES, GENERATED, OUT):
-        folder.mkdir(parents=True, exist_ok=True)
+    root = output_root()
+    for folder in (root / "figures", root / "paper" / "generated", root / "out"):
+        output_dir(folder)

@@ -2,7 +2,8 @@
 
 Each case's ``setup(d)`` writes its files into the folder ``d`` and returns ``argv`` (a
 ``crfmap`` command line) or ``call`` (a library call), plus ``names``: strings of which the
-one error line must contain at least one (the input it is about). Every case must end in a
+one error line must contain at least one (the input it is about), and optionally ``env``:
+environment variables set for the run (a value of None removes one). Every case must end in a
 refusal: exit status 2 (library: an InputError), exactly one stderr line naming the input,
 no traceback, the folder unchanged (no output, previous output intact, no temporary file),
 in bounded time and memory. ``fault`` makes writes fail (see faults.py); ``subprocess``
@@ -29,6 +30,7 @@ class Case:
     signal: int | None = None  # send this signal once a temporary file appears
     expect_rc: int = 2
     extra: dict = field(default_factory=dict)
+    entry: str = "crfmap"  # the command line: a key of harness.ENTRIES (crfmap, reproduce, run, warmup)
 
 
 CASES: list[Case] = []

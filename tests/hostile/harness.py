@@ -57,11 +57,37 @@ def _hung(signum, frame):
     raise TimeoutError(f"no answer within {HANG_LIMIT:g} s (blocked)")
 
 
+ENTRIES = {"crfmap": "crfmap.cli", "reproduce": "crfmap.repro.reproduce", "run": "crfmap.repro.run",
+           "warmup": "crfmap.repro.warmup"}  # a case's command line: its module
+
+
+@contextlib.contextmanager
+def environment(changes):
+    """Inside the block, ``os.environ`` holds ``changes`` (None: the variable is removed)."""
+    saved = {name: os.environ.get(name) for name in changes}
+    try:
+        _apply(os.environ, changes)
+        yield
+    finally:
+        _apply(os.environ, saved)
+
+
+def _apply(env, changes):
+    for name, value in changes.items():
+        if value is None:
+            env.pop(name, None)
+        else:
+            env[name] = value
+
+
 def run_inprocess(case, spec, d):
-    """(exit status, stderr text) of running ``spec`` here, with the case's fault."""
+    """(exit status, stderr text) of running ``spec`` here, with the case's fault and environment."""
+    import importlib
+
     from faults import fault
-    from crfmap.cli import main
     from crfmap.errors import CrfmapError
+
+    main = importlib.import_module(ENTRIES[case.entry]).main
 
     err = io.StringIO()
     old_prof = signal.signal(signal.SIGPROF, _cpu_exceeded)
@@ -71,7 +97,8 @@ def run_inprocess(case, spec, d):
     cwd = os.getcwd()
     os.chdir(d)
     try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), fault(case.fault, d):
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), fault(case.fault, d), \
+                environment(spec.get("env", {})):
             if "call" in spec:
                 try:
                     spec["call"]()
@@ -111,13 +138,15 @@ def _child_limits(fsize):
 
 def run_subprocess(case, spec, d):
     """(exit status, stderr text) of a child ``crfmap`` process; signals are sent once a temporary appears."""
+    entry = ENTRIES[case.entry]
     if case.fault not in (None, "fsize"):
         code = (f"import sys; sys.path.insert(0, {str(HERE)!r}); from faults import fault; "
-                f"from crfmap.cli import main\nwith fault({case.fault!r}, {str(d)!r}): rc = main(sys.argv[1:])\n"
+                f"from {entry} import main\nwith fault({case.fault!r}, {str(d)!r}): rc = main(sys.argv[1:])\n"
                 "sys.exit(rc)")
     else:
-        code = "import sys; from crfmap.cli import main; sys.exit(main(sys.argv[1:]))"
+        code = f"import sys; from {entry} import main; sys.exit(main(sys.argv[1:]))"
     env = dict(os.environ, PYTHONWARNINGS="default")
+    _apply(env, spec.get("env", {}))
     proc = subprocess.Popen([sys.executable, "-c", code, *spec["argv"]], cwd=d, env=env, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True, preexec_fn=_child_limits(case.fault == "fsize"))
     start = time.monotonic()
@@ -179,6 +208,7 @@ def run_case(case, inprocess=True):
 
 def all_cases():
     import cases
+    import cases_batch  # noqa: F401  (sweep files, environment variables)
     import cases_more  # noqa: F401  (registers the rest)
 
     unique = {}

@@ -23,4 +23,4 @@ def test_catalogue_covers_every_class():
     classes = {c.cls for c in CASES}
     assert len(CASES) >= 80
     assert classes >= {"maps", "yaml", "npy", "carmen", "ros1", "ros2", "potentials", "options", "output",
-                       "faults", "signals", "library"}
+                       "faults", "signals", "library", "sweep", "environment"}

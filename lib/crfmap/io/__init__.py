@@ -12,6 +12,7 @@ Public API (imported on first use, so ``import crfmap.io`` stays cheap):
 - :mod:`crfmap.io.nav2_costmap`: ``nav2_counts``, ``static_layer_costs`` (what nav2's costmap makes of a map)
 - :mod:`crfmap.io.npy_grid`: ``load_npy``, ``save_npy``, ``npy_sidecar_path``
 - :mod:`crfmap.io.atomic`: ``atomic_path``, ``atomic_dir``
+- ``read_yaml``: a small YAML file read as strictly as a map YAML (no aliases, bounded nesting and size)
 """
 from __future__ import annotations
 
@@ -34,5 +35,6 @@ _API = {
     "static_layer_costs": "nav2_costmap",
     "atomic_path": "atomic",
     "atomic_dir": "atomic",
+    "read_yaml": "_yaml",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)

@@ -10,6 +10,8 @@ interfaces are :mod:`crfmap.io.map_server` and :mod:`crfmap.io.npy_grid`.
 from __future__ import annotations
 
 import math
+import os
+import stat
 
 import yaml
 
@@ -67,15 +69,23 @@ def read_text_file(path, what, limit=MAX_TEXT_BYTES):
     """The UTF-8 text of a small regular file (a FIFO, device or huge file is refused)."""
     path = check_input_file(path, what)
     try:
-        size = path.stat().st_size
-        if size > limit:
-            raise InputError(path, f"{size:,} bytes is too large for {what} (at most {limit:,})")
-        with open(path, "rb") as f:
+        # non-blocking: a FIFO swapped in after the check above must not hang the open (fstat then refuses it)
+        with open(os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0)), "rb") as f:
+            info = os.fstat(f.fileno())
+            if not stat.S_ISREG(info.st_mode):
+                raise InputError(path, f"not a regular file (a device, FIFO or socket), expected {what}")
+            if info.st_size > limit:
+                raise InputError(path, f"{info.st_size:,} bytes is too large for {what} (at most {limit:,})")
             return f.read(limit + 1).decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(path, "not a text file (expected YAML)") from None
     except OSError as exc:
         raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
+
+
+def read_yaml(path, what, limit=MAX_TEXT_BYTES):
+    """The YAML document in the small regular file ``path``, read strictly (a FIFO is refused unopened)."""
+    return load_text(read_text_file(path, what, limit), path)
 
 
 def read_mapping(path, what):

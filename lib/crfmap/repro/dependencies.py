@@ -22,9 +22,12 @@ from crfmap import paths
 from crfmap.errors import InputError
 
 # lib/crfmap of the checkout (CRFMAP_ROOT moves it, as the workflow tests do with a copy)
-LIBRARY = paths.PROJECT_ROOT / "lib" / "crfmap"
-if not LIBRARY.is_dir():
-    LIBRARY = Path(__file__).resolve().parents[1]
+def _library() -> Path:
+    """lib/crfmap of the checkout, else this installed package (read at each use: CRFMAP_ROOT is checked then)."""
+    checkout = paths.PROJECT_ROOT / "lib" / "crfmap"
+    return checkout if checkout.is_dir() else Path(__file__).resolve().parents[1]
+
+
 PACKAGE = "crfmap"
 
 
@@ -69,7 +72,7 @@ def _module_file(module: str) -> Path | None:
     """The source file of a ``crfmap`` module or package, or None if there is none."""
     if module != PACKAGE and not module.startswith(PACKAGE + "."):
         return None
-    base = LIBRARY.joinpath(*module.split(".")[1:])
+    base = _library().joinpath(*module.split(".")[1:])
     for candidate in (base / "__init__.py", base.with_suffix(".py")):
         if candidate.is_file():
             return candidate

@@ -44,14 +44,13 @@ def current() -> dict:
     >>> sorted(current())
     ['notebook', 'parameters', 'quick']
     """
-    from crfmap import paths
+    from crfmap import environment, paths
     from crfmap.repro.dependencies import parameter_defaults
 
     namespace = vars(sys.modules.get("__main__", object()))
-    given = os.environ.get("CRFMAP_RUN")
+    given = environment.run_context()
     if given:
-        run = json.loads(given)
-        notebook, overrides = run.get("notebook"), dict(run.get("parameters", {}))
+        notebook, overrides = given["notebook"], dict(given["parameters"])
     else:
         notebook, overrides = _session_notebook(namespace), {}
     parameters = {}

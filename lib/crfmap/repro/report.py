@@ -41,10 +41,10 @@ def save_figure(fig, name: str, dpi: int = 150, vector: bool = True) -> Path:
     ``vector=True`` also writes ``figures/<name>.pdf`` (vector lines and text) for authors who
     include the figures in LaTeX.
     """
-    paths.FIGURES.mkdir(parents=True, exist_ok=True)
+    stamp = json.dumps(_clean(provenance.current()), sort_keys=True)  # a bad CRFMAP_RUN: refused before any write
+    paths.output_dir(paths.FIGURES)
     target = paths.FIGURES / f"{name}.png"
     with atomic_path(target) as tmp:
-        stamp = json.dumps(_clean(provenance.current()), sort_keys=True)
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png", metadata={provenance.PNG_KEY: stamp})
     if vector:
         with atomic_path(target.with_suffix(".pdf")) as tmp:
@@ -57,9 +57,9 @@ def save_numbers(name: str, numbers: dict) -> Path:
 
     The file also holds the run that made it under ``"_provenance"``.
     """
-    paths.GENERATED.mkdir(parents=True, exist_ok=True)
-    target = paths.GENERATED / f"{name}.json"
     data = {**_clean(numbers), provenance.KEY: _clean(provenance.current())}
+    paths.output_dir(paths.GENERATED)
+    target = paths.GENERATED / f"{name}.json"
     with atomic_path(target) as tmp:
         Path(tmp).write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
     return target
@@ -95,7 +95,7 @@ def markdown_table(header, rows, digits: int = 4) -> str:
 
 def save_table(name: str, header, rows, digits: int = 4, caption: str = "") -> Path:
     """Save a table as ``paper/generated/<name>.md`` (Markdown) and ``<name>.json`` (raw values)."""
-    paths.GENERATED.mkdir(parents=True, exist_ok=True)
+    paths.output_dir(paths.GENERATED)
     text = (f"{caption}\n\n" if caption else "") + markdown_table(header, rows, digits)
     text += provenance.MD_PREFIX + json.dumps(_clean(provenance.current()), sort_keys=True) + " -->\n"
     target = paths.GENERATED / f"{name}.md"

@@ -23,10 +23,13 @@ import time
 from pathlib import Path
 
 from crfmap import paths
-from crfmap.errors import DataMissingError
+from crfmap.errors import CrfmapError, DataMissingError, one_line
 from crfmap.repro.dependencies import data_needed, notebooks
 
-SNAKEFILE = paths.PROJECT_ROOT / "workflow" / "Snakefile"
+
+def snakefile() -> Path:
+    """The workflow's Snakefile in the checkout (``$CRFMAP_ROOT``)."""
+    return paths.PROJECT_ROOT / "workflow" / "Snakefile"
 
 
 def missing_data(todo) -> list[str]:
@@ -42,14 +45,20 @@ def missing_data(todo) -> list[str]:
 
 
 def snakemake_command(targets=(), cores=2, directory=None, quick=False, dry_run=False, profile=None,
-                      extra=()) -> list[str]:
-    """The ``snakemake`` command line running the workflow (in this interpreter's environment)."""
+                      extra=(), config=None) -> list[str]:
+    """The ``snakemake`` command line running the workflow (in this interpreter's environment).
+
+    ``config``: more ``--config`` entries (``{"max_points": 500}``; lists are written as YAML flow lists).
+    """
     # targets first: several snakemake options (--config, --quiet) take lists
-    command = [sys.executable, "-m", "snakemake", *targets, "--snakefile", str(SNAKEFILE),
+    command = [sys.executable, "-m", "snakemake", *targets, "--snakefile", str(snakefile()),
                "--directory", str(directory or paths.OUTPUT_ROOT), "--cores", str(cores),
                "--show-failed-logs", "--printshellcmds"]
-    if quick:
-        command += ["--config", "quick=true"]
+    entries = {"quick": "true"} if quick else {}
+    for key, value in (config or {}).items():
+        entries[key] = "[" + ",".join(value) + "]" if isinstance(value, (list, tuple)) else str(value)
+    if entries:
+        command += ["--config", *(f"{k}={v}" for k, v in entries.items())]
     if dry_run:
         command += ["--dry-run"]
     if profile:
@@ -57,39 +66,103 @@ def snakemake_command(targets=(), cores=2, directory=None, quick=False, dry_run=
     return command + list(extra)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (plus where to find help), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, one_line(f"{self.prog}: error: {message} (see {self.prog} --help)", 1000) + "\n")
+
+
+def _positive(text) -> int:
+    from crfmap.environment import whole_number
+
+    try:
+        return whole_number("--max-points", text, "points")
+    except CrfmapError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def sweep_file(given) -> Path:
+    """The sweep file ``--sweep`` names: ``NAME`` is ``workflow/sweeps/NAME.yaml``; a path ending in .yaml is itself."""
+    if given.endswith(".yaml") or os.sep in given:
+        return Path(given).resolve()
+    return paths.PROJECT_ROOT / "workflow" / "sweeps" / f"{given}.yaml"
+
+
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m crfmap.repro.reproduce", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="python -m crfmap.repro.reproduce", description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small settings (quick=True), into out/quick/")
     parser.add_argument("--only", nargs="*", help="notebook name prefixes to run, e.g. 04 07")
     parser.add_argument("--no-paper", action="store_true", help="do not build the paper (same as --only with all)")
-    parser.add_argument("--sweep", nargs="*", default=[], help="sweeps of workflow/sweeps/ to run, by name")
-    parser.add_argument("--cores", type=int, default=2)
+    parser.add_argument("--sweep", nargs="+", default=[], help="sweeps to run: names of workflow/sweeps/ or "
+                        "files NAME.yaml (of one folder)")
+    parser.add_argument("--max-points", type=_positive, help="run a sweep of more points than "
+                        "crfmap.repro.sweep.MAX_POINTS (200)")
+    parser.add_argument("--cores", type=_cores, default=2)
     parser.add_argument("--dry-run", "-n", action="store_true", help="only say what would run, and why")
     parser.add_argument("--profile", type=Path, help="a workflow profile folder, e.g. workflow/profiles/slurm")
     parser.add_argument("--started-at", type=float, help="Unix time `make reproduce` started (before the venv "
                         "and the warm-up): recorded with the workflow's own time after a full run")
     parser.add_argument("extra", nargs=argparse.REMAINDER, help="-- then arguments for snakemake")
     args = parser.parse_args(argv)
+    try:
+        return _reproduce(args)
+    except CrfmapError as exc:
+        print(one_line(f"reproduce: error: {exc}", 1000), file=sys.stderr)
+        return 2
 
+
+def _cores(text) -> int:
+    from crfmap.environment import whole_number
+
+    try:
+        return whole_number("--cores", text, "cores")
+    except CrfmapError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _reproduce(args) -> int:
+    from crfmap import environment
+
+    environment.check()  # before snakemake's jobs import numba, which reads NUMBA_NUM_THREADS once
     todo = [] if args.sweep and not args.only else notebooks(args.only)
+    loaded = []
     if args.sweep:
         from crfmap.repro.sweep import load
 
-        todo += [load(paths.PROJECT_ROOT / "workflow" / "sweeps" / f"{name}.yaml").notebook for name in args.sweep]
+        files = [sweep_file(name) for name in args.sweep]
+        if len({f.parent for f in files}) > 1:
+            raise CrfmapError(f"--sweep: the sweep files must be in one folder, got {', '.join(map(str, files))}")
+        loaded = [load(f, args.max_points) for f in files]
+        names = {}
+        for s in loaded:  # out/runs/<name>/: one folder on a case-insensitive file system
+            other = names.setdefault(s.name.casefold(), s)
+            if other is not s:
+                raise CrfmapError(f"--sweep: {other.source} and {s.source} would both write to out/runs/{s.name}/")
+        todo += [s.notebook for s in loaded]
     missing = missing_data(todo)
     if missing:  # say it before anything runs, not after half the figures were regenerated
         for line in missing:
             print(f"reproduce: {line}", file=sys.stderr)
         print("reproduce: see data/README.md; nothing was run", file=sys.stderr)
         return 2
-    targets = [f"out/runs/{name}/collected.csv" for name in args.sweep]
+    targets = [f"out/runs/{s.name}/collected.csv" for s in loaded]
     if args.only or (args.no_paper and not args.sweep):
         targets += [f"notebook_{nb.stem}" for nb in notebooks(args.only)]
     elif not args.sweep:
         targets += ["all"]  # every notebook, then the paper (with --quick: no paper)
     directory = paths.OUT / "quick" if args.quick else paths.OUTPUT_ROOT
+    environment.writable_folder(directory, "CRFMAP_OUTPUT_ROOT")
+    config = {"sweep_names": [s.name for s in loaded]}
+    if loaded and loaded[0].source.parent.resolve() != (paths.PROJECT_ROOT / "workflow" / "sweeps").resolve():
+        config["sweeps"] = loaded[0].source.parent
+    if args.max_points is not None:
+        config["max_points"] = args.max_points
+    for sweep in loaded:
+        print(f"reproduce: {estimate(sweep, args.cores)}", file=sys.stderr)
     extra = [a for a in args.extra if a != "--"]
-    command = snakemake_command(targets, args.cores, directory, args.quick, args.dry_run, args.profile, extra)
+    command = snakemake_command(targets, args.cores, directory, args.quick, args.dry_run, args.profile, extra,
+                                config)
     start = time.perf_counter()
     code = subprocess.call(command, env={**os.environ, "MPLBACKEND": os.environ.get("MPLBACKEND", "Agg")})
     seconds = time.perf_counter() - start
@@ -98,6 +171,19 @@ def main(argv=None) -> int:
     if code == 0 and targets == ["all"] and not (args.dry_run or args.quick or extra or args.profile):
         write_wall_record(seconds, args.started_at, args.cores)
     return code
+
+
+def estimate(sweep, cores) -> str:
+    """What a sweep will run and about how long it takes (each point as long as the notebook's last full run)."""
+    from crfmap.repro.timings import BENCHMARKS, describe, expected_seconds
+
+    points = len(sweep.points())
+    each = expected_seconds([sweep.notebook.stem], paths.OUTPUT_ROOT)[sweep.notebook.stem]
+    side_by_side = 1 if sweep.notebook.stem in BENCHMARKS else max(1, cores)
+    total = each * -(-points // side_by_side)
+    settings = "quick settings: likely less" if sweep.fixed.get("quick") else "full settings"
+    return (f"sweep {sweep.name}: {points} point{'s' * (points != 1)} of {sweep.notebook.name}, about "
+            f"{describe(total)} on {cores} core{'s' * (cores != 1)} ({describe(each)} per point at {settings})")
 
 
 def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None) -> Path:

@@ -65,6 +65,14 @@ def main(argv=None) -> int:
     parser.add_argument("--log", type=Path, help="the executed notebook as it runs (kept on failure)")
     parser.add_argument("--threads", type=int, help="most threads the kernel's numba/OpenMP/BLAS may use")
     args = parser.parse_args(argv)
+    from crfmap import environment
+    from crfmap.errors import CrfmapError
+
+    try:  # the kernel inherits the environment: its numba reads NUMBA_NUM_THREADS once, at import
+        environment.check()
+    except CrfmapError as exc:
+        print(f"run: error: {exc}", file=sys.stderr)
+        return 2
     try:
         run_notebook(args.notebook, args.output_root, json.loads(args.parameters), args.executed, args.log,
                      threads=args.threads)

@@ -308,6 +308,14 @@ def main(argv=None) -> int:
     if args.worker is not None:
         print(json.dumps(run_tasks(args.worker)))
         return 0
+    from crfmap import environment
+    from crfmap.errors import CrfmapError
+
+    try:  # `make reproduce` and `make test` start here: a bad NUMBA_NUM_THREADS is named before numba fails on it
+        environment.check()
+    except CrfmapError as exc:
+        print(f"warmup: error: {exc}", file=sys.stderr)
+        return 2
     if is_warm() and not args.force:
         print(f"numba cache already warm ({cache_dir() or 'beside the sources'})")
         return 0

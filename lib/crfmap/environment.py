@@ -1,0 +1,179 @@
+"""The environment variables crfmap reads, each checked where it is read: errors name the variable.
+
+=====================  ===============================  ===========================================
+variable               read by                          accepted
+=====================  ===============================  ===========================================
+``CRFMAP_ROOT``        :mod:`crfmap.paths`              an existing folder (the checkout; tests use a copy)
+``CRFMAP_OUTPUT_ROOT`` :mod:`crfmap.paths`              a folder, existing or not; writable where written
+``CRFMAP_DATA``        :func:`crfmap.paths.data_root`   a folder (missing files are named when needed)
+``CRFMAP_MAX_CELLS``   :func:`crfmap.checks.max_cells`  a whole number >= 1 (``4e8`` too); no "no limit"
+``CRFMAP_RUN``         :mod:`crfmap.repro.provenance`   a JSON object (set by :mod:`crfmap.repro.run`)
+``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number >= 1
+``NUMBA_CACHE_DIR``    numba, :mod:`crfmap._numba_cache` a folder numba can write (existing or not)
+=====================  ===============================  ===========================================
+
+A folder variable set but empty is refused (an empty path would mean the working directory); an
+empty number variable means unset (the shell idiom ``VAR= command``), as numba reads its own.
+Numba reads ``NUMBA_NUM_THREADS`` once, at its import, and then fails with a traceback (``0``) or
+ignores the value (``abc``): the entry points (the ``crfmap`` command, ``crfmap.repro.reproduce``,
+``crfmap.repro.run``) call :func:`check` before anything imports numba. ``XDG_CACHE_HOME``,
+``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only hints: a bad value falls back to the default.
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import tempfile
+from pathlib import Path
+
+from crfmap.errors import InputError
+
+_WHOLE = re.compile(r"\s*[+]?\d+\s*\Z")
+
+
+def _named(variable, text) -> str:
+    return f"{variable}={text}" if len(text) <= 80 else f"{variable}={text[:75]}[...]"
+
+
+def folder(variable, default=None, must_exist=False) -> Path | None:
+    """``$variable`` as a folder path, or ``default`` when it is unset.
+
+    >>> os.environ["CRFMAP_EXAMPLE"] = ""
+    >>> folder("CRFMAP_EXAMPLE")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: CRFMAP_EXAMPLE: is set but empty (unset it for the default, or name a folder)
+    >>> del os.environ["CRFMAP_EXAMPLE"]
+    """
+    text = os.environ.get(variable)
+    if text is None:
+        return None if default is None else Path(default)
+    if not text.strip():
+        raise InputError(variable, "is set but empty (unset it for the default, or name a folder)")
+    path = Path(text).expanduser()
+    if path.exists() and not path.is_dir():
+        raise InputError(_named(variable, text), "is not a folder")
+    if must_exist and not path.is_dir():
+        raise InputError(_named(variable, text), "no such folder")
+    return path
+
+
+def writable_folder(path, variable) -> Path:
+    """``path`` if a file can be created in it (or in its nearest existing parent, where it will be made).
+
+    Nothing is left behind: the probe is an unnamed temporary file. Errors name ``variable`` (the
+    setting that chose the folder) with its value, and the folder.
+    """
+    path = Path(path)
+    given = os.environ.get(variable)
+    source = _named(variable, given) if given else f"{path} (unset {variable}: its default)"
+    probe = path
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise InputError(source, f"{probe} is not a folder")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        where = f"{path}" if probe == path else f"{path} (in {probe})"
+        raise InputError(source, f"cannot write {where}: {exc.strerror or exc}") from None
+    return path
+
+
+def whole_number(variable, text, what, low=1) -> int:
+    """``text`` (an environment value or an option) as a whole number >= ``low``; ``4e8`` is accepted.
+
+    >>> whole_number("CRFMAP_MAX_CELLS", "4e8", "cells")
+    400000000
+    >>> whole_number("CRFMAP_MAX_CELLS", "1e400", "cells")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: CRFMAP_MAX_CELLS=1e400: expected a finite whole number of cells, got infinity
+    """
+    text = str(text)
+    if _WHOLE.match(text):  # digits: exact, however long
+        value = int(text)
+        if value < low:
+            raise InputError(_named(variable, text), f"must be at least {low}")
+        return value
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(_named(variable, text), f"expected a whole number of {what}") from None
+    if not math.isfinite(value):
+        raise InputError(_named(variable, text), f"expected a finite whole number of {what}, got "
+                         f"{'infinity' if math.isinf(value) else 'not-a-number'}")
+    if value != int(value):
+        raise InputError(_named(variable, text), f"expected a whole number of {what}")
+    if value < low:
+        raise InputError(_named(variable, text), f"must be at least {low}")
+    return int(value)
+
+
+def numba_threads() -> int | None:
+    """``$NUMBA_NUM_THREADS`` checked (None: unset or empty, numba's own default)."""
+    text = os.environ.get("NUMBA_NUM_THREADS", "")
+    if not text.strip():
+        return None
+    if not _WHOLE.match(text):
+        raise InputError(_named("NUMBA_NUM_THREADS", text), "expected a whole number of threads >= 1")
+    value = int(text)
+    if value < 1:
+        raise InputError(_named("NUMBA_NUM_THREADS", text), "must be at least 1 (numba refuses 0)")
+    return value
+
+
+def numba_cache_dir() -> Path | None:
+    """``$NUMBA_CACHE_DIR`` if set, checked writable (numba's own error comes only at the first kernel)."""
+    text = os.environ.get("NUMBA_CACHE_DIR", "")
+    if not text:
+        return None  # numba treats an empty value as unset too
+    return writable_folder(Path(text).expanduser(), "NUMBA_CACHE_DIR")
+
+
+def run_context() -> dict | None:
+    """``$CRFMAP_RUN`` (the notebook :mod:`crfmap.repro.run` executes and its parameters), or None if unset.
+
+    >>> os.environ["CRFMAP_RUN"] = '{"notebook": "04_denoising.ipynb", "parameters": {"noise": 0.3}}'
+    >>> run_context()["parameters"]
+    {'noise': 0.3}
+    >>> del os.environ["CRFMAP_RUN"]
+    """
+    import json
+
+    text = os.environ.get("CRFMAP_RUN", "")
+    if not text.strip():
+        return None
+    try:
+        run = json.loads(text)
+    except ValueError as exc:
+        raise InputError(_named("CRFMAP_RUN", text), f"not JSON ({exc.msg})") from None
+    notebook, parameters = (run.get("notebook"), run.get("parameters", {})) if isinstance(run, dict) else (0, 0)
+    if not (notebook is None or (isinstance(notebook, str) and "/" not in notebook)) \
+            or not isinstance(parameters, dict):
+        raise InputError(_named("CRFMAP_RUN", text), 'expected {"notebook": "NAME.ipynb", "parameters": {...}}')
+    return {"notebook": notebook, "parameters": parameters}
+
+
+def number(variable, what) -> int | None:
+    """``$variable`` as a whole number >= 1, or None when it is unset or empty."""
+    text = os.environ.get(variable, "")
+    return whole_number(variable, text, what) if text.strip() else None
+
+
+def check() -> None:
+    """Check every variable an entry point depends on before it starts (InputError naming the first bad one).
+
+    The same checks as where each is read (:mod:`crfmap.paths`, :func:`crfmap.checks.max_cells`, ...).
+
+    >>> check()
+    """
+    numba_threads()
+    numba_cache_dir()
+    number("CRFMAP_MAX_CELLS", "cells")
+    run_context()
+    folder("CRFMAP_ROOT", must_exist=True)
+    folder("CRFMAP_OUTPUT_ROOT")
+    folder("CRFMAP_DATA")
