@@ -77,7 +77,7 @@ def test_refine_node_over_dds(tmp_path, monkeypatch):
                 "intel": _expected(occupancy_grid(intel), tmp_path, "intel")}
 
     node = NodeProcess(["refine", "--period", "0"], env)
-    participant = DomainParticipant()
+    participant = DomainParticipant(int(env["ROS_DOMAIN_ID"]))
     try:
         writer, reader = _writer_reader(participant)
         node.wait_for("publishing /map_refined")
@@ -185,7 +185,7 @@ def test_map_node_over_dds_equals_online_mapper(tmp_path, monkeypatch):
 
     node = NodeProcess(["map", "--bounds", *map(repr, bounds), "--resolution", "0.05", "--radius", "4",
                         "--margin", "3", "--period", "0.5"], env)
-    participant = DomainParticipant()
+    participant = DomainParticipant(int(env["ROS_DOMAIN_ID"]))
     try:
         def writer(topic, kind, profile):
             return DataWriter(participant, Topic(participant, "rt" + topic, T.TYPES[kind]), qos=dds_qos(profile))

@@ -84,7 +84,7 @@ def _time_refine(name, grid, repeats):
     from crfmap.ros.dds import dds_qos, native_message
     from crfmap.ros.messages import grid_out
 
-    participant = DomainParticipant()
+    participant = DomainParticipant(int(os.environ["ROS_DOMAIN_ID"]))
     writer = DataWriter(participant, Topic(participant, "rt/map", dds_types.OccupancyGrid), qos=dds_qos(qos.MAP))
     reader = DataReader(participant, Topic(participant, "rt/map_refined", dds_types.OccupancyGrid),
                         qos=dds_qos(qos.MAP, reader=True))
