@@ -120,6 +120,7 @@ def bench_node_map(quick=False):
     if not paths.have_data(OLIN_BAG):
         return [record("node-map-olin", note="skipped: the shared data was not found")]
     from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
 
     from crfmap.io.bag_reader import read_bag
     from crfmap.mapping.builder import scan_bounds
@@ -127,7 +128,7 @@ def bench_node_map(quick=False):
 
     bag = paths.data_file(OLIN_BAG)
     bounds = scan_bounds(read_bag(bag).scans)
-    with AnyReader([bag]) as reader:
+    with AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         wanted = {"/scan", "/tf", "/tf_static"}
         messages = [(c.topic, reader.deserialize(raw, c.msgtype))
                     for c, _, raw in reader.messages(connections=[c for c in reader.connections if c.topic in wanted])]
