@@ -15,7 +15,7 @@ import warnings
 from crfmap.errors import CrfmapError, one_line
 
 # Sub-command name -> module in crfmap.commands providing add_parser(subparsers) and run(args).
-COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench", "evaluate")
+COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench", "evaluate", "node")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -260,7 +260,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     if memory:
         tasks.append(("memory", 1024 if quick else max(sizes)))
     if online:
-        tasks.append(("online", None))
+        tasks += [("online", None), ("node", None)]
     if external:
         tasks.append(("external", None))
     if goals:
@@ -316,6 +316,11 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
 
             yield from bench_online(quick=quick, final_tol=online_tol)
             yield from bench_peers(quick=quick)
+        elif kind == "node":
+            from crfmap.bench.node import bench_node_map, bench_node_refine
+
+            yield from bench_node_refine(quick=quick)
+            yield from bench_node_map(quick=quick)
         elif kind == "external":
             from crfmap.bench.external import run_external
 

@@ -1,0 +1,147 @@
+"""ROS 2 without a ROS install: the node's topics over Eclipse Cyclone DDS, on ROS 2's wire conventions.
+
+What a ROS 2 node (rmw_cyclonedds_cpp, or any RTPS RMW on the same domain) expects, and what
+this backend does, following rmw_cyclonedds_cpp's ``create_readwrite_qos`` and ``make_fqtopic``:
+
+- the DDS domain is ``ROS_DOMAIN_ID`` (default 0);
+- a ROS topic ``/map`` is the DDS topic ``rt/map``; its type is ``nav_msgs::msg::dds_::OccupancyGrid_``
+  (:mod:`crfmap.ros.dds_types`);
+- samples are XCDR1 (plain CDR), little-endian: the data representation QoS offers XCDR1 only,
+  as rmw_cyclonedds_cpp's type support does;
+- QoS (:mod:`crfmap.ros.qos`): reliable (blocking time infinite) or best effort; volatile or
+  transient local, with the durability service keeping the writer's own history (keep last
+  depth), as rmw_cyclonedds_cpp sets it; liveliness automatic; writers do not auto-dispose.
+
+The backend creates no ``ros_discovery_info`` entries, so ROS 2 tools list the topics (they are
+DDS endpoints) but not a node name.
+
+>>> ros_topic_name("/map"), ros_topic_name("scan")
+('rt/map', 'rt/scan')
+"""
+from __future__ import annotations
+
+import os
+
+from crfmap.errors import InputError
+from crfmap.ros import qos as ros_qos
+from crfmap.ros.messages import stamp_parts
+
+
+def ros_topic_name(topic: str) -> str:
+    """The DDS topic of a ROS 2 topic (node namespace '/'): 'rt/' and the name without its leading '/'."""
+    return "rt/" + topic.lstrip("/")
+
+
+def domain_id(value=None) -> int:
+    """The DDS domain: ``value``, else ROS_DOMAIN_ID, else 0 (ROS 2 allows 0..232 with the default ports)."""
+    raw = value if value is not None else os.environ.get("ROS_DOMAIN_ID", "0") or "0"
+    try:
+        number = int(raw)
+    except (TypeError, ValueError):
+        raise InputError("ROS_DOMAIN_ID" if value is None else "--domain", f"must be a whole number, got {raw!r}") from None
+    if not 0 <= number <= 232:
+        raise InputError("ROS_DOMAIN_ID" if value is None else "--domain", f"must be in 0..232, got {number}")
+    return number
+
+
+def dds_qos(profile: ros_qos.Profile, reader=False):
+    """The Cyclone DDS QoS of a :class:`crfmap.ros.qos.Profile` (rmw_cyclonedds_cpp's mapping)."""
+    from cyclonedds.qos import Policy, Qos
+    from cyclonedds.util import duration
+
+    depth = profile.reader_depth if reader and profile.reader_depth else profile.depth
+    history = Policy.History.KeepLast(depth)
+    policies = [
+        history,
+        Policy.Reliability.Reliable(duration(infinite=True)) if profile.reliable else Policy.Reliability.BestEffort,
+        Policy.Liveliness.Automatic(duration(infinite=True)),
+        Policy.DataRepresentation(use_cdrv0_representation=True),  # XCDR1, as ROS 2's type support
+    ]
+    if profile.transient_local:
+        policies += [Policy.Durability.TransientLocal,
+                     Policy.DurabilityService(cleanup_delay=0, history=history, max_samples=-1, max_instances=-1,
+                                              max_samples_per_instance=-1)]
+    else:
+        policies.append(Policy.Durability.Volatile)
+    if not reader:
+        policies.append(Policy.WriterDataLifecycle(autodispose=False))
+    return Qos(*policies)
+
+
+def _time(types, ns):
+    sec, nanosec = stamp_parts(ns)
+    return types.Time(sec=sec, nanosec=nanosec)
+
+
+def _info(types, msg):
+    x, y, z, qx, qy, qz, qw = msg.origin
+    return types.MapMetaData(
+        map_load_time=_time(types, msg.map_load_ns), resolution=float(msg.resolution), width=int(msg.width),
+        height=int(msg.height), origin=types.Pose(position=types.Point(x=x, y=y, z=z),
+                                                  orientation=types.Quaternion(x=qx, y=qy, z=qz, w=qw)))
+
+
+def native_message(kind, msg):
+    """The Cyclone DDS sample of a :class:`crfmap.ros.messages.GridMessage` for a 'grid' or 'metadata' topic."""
+    from crfmap.ros import dds_types as types
+
+    if kind == "metadata":
+        return _info(types, msg)
+    return types.OccupancyGrid(header=types.Header(stamp=_time(types, msg.stamp_ns), frame_id=msg.frame_id),
+                               info=_info(types, msg), data=msg.data.astype("int8", copy=False).tolist())
+
+
+class DdsBackend:
+    """The node's middleware over Cyclone DDS (one participant on ``domain``; see the module docstring)."""
+
+    def __init__(self, domain=None):
+        try:
+            from cyclonedds.core import WaitSet
+            from cyclonedds.domain import DomainParticipant
+        except ImportError:
+            raise InputError("--backend dds", "needs the cyclonedds package (pip install 'crfmap[ros]')") from None
+        self.participant = DomainParticipant(domain_id(domain))
+        self.waitset = WaitSet(self.participant)
+        self.readers = []  # (reader, callback, batch)
+        self.keep = []  # writers, topics and conditions stay alive with the backend
+
+    def _topic(self, topic, kind):
+        from cyclonedds.topic import Topic
+
+        from crfmap.ros.dds_types import TYPES
+
+        t = Topic(self.participant, ros_topic_name(topic), TYPES[kind])
+        self.keep.append(t)
+        return t
+
+    def subscribe(self, topic, kind, profile, callback):
+        from cyclonedds.core import InstanceState, ReadCondition, SampleState, ViewState
+        from cyclonedds.sub import DataReader
+
+        reader = DataReader(self.participant, self._topic(topic, kind), qos=dds_qos(profile, reader=True))
+        condition = ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any)
+        self.waitset.attach(condition)
+        self.keep.append(condition)
+        self.readers.append((reader, callback, profile.reader_depth or profile.depth))
+        return reader
+
+    def publisher(self, topic, kind, profile):
+        from cyclonedds.pub import DataWriter
+
+        writer = DataWriter(self.participant, self._topic(topic, kind), qos=dds_qos(profile))
+        self.keep.append(writer)
+        return lambda msg: writer.write(native_message(kind, msg))
+
+    def spin_once(self, timeout):
+        from cyclonedds.util import duration
+
+        self.waitset.wait(duration(seconds=max(float(timeout), 0.0)))
+        for reader, callback, batch in self.readers:
+            for sample in reader.take(N=batch):
+                callback(sample)
+
+    def close(self):
+        self.readers.clear()
+        self.keep.clear()
+        self.waitset = None
+        self.participant = None  # deleting the participant deletes its entities
