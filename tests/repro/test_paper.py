@@ -94,3 +94,31 @@ def test_a_result_without_a_run_record_is_refused(out):
     with pytest.raises(InputError, match=r"old.md: records no run parameters"):
         paper.build_paper(template, out / "p.md")
     assert paper.build_paper(template, out / "p.md", strict=False).read_text().startswith("| a |")
+
+
+def test_build_facts_fill_their_placeholders_and_comments_never_reach_the_report(out, monkeypatch):
+    from crfmap.repro import buildinfo, paper
+
+    monkeypatch.setattr(buildinfo, "describe", lambda data=True: {"python": "3.11.7", "wall": "it took a while"})
+    template = out / "t.md"
+    template.write_text("Python {{build:python}}; {{build:wall}}.\n<!-- TODO(lead): {{table:absent}} -->\n"
+                        "{{build:nothing.here}}\n")
+    result = paper.build_paper(template, out / "p.md", publish=False).read_text()
+    assert result.startswith("Python 3.11.7; it took a while.\n")
+    assert "TODO" not in result and "table absent" not in result  # the comment's placeholder was not filled
+    assert "build fact nothing.here not known" in result and "Not generated when this report was built" in result
+
+
+def test_build_facts_describe_this_environment(tmp_path):
+    import platform
+
+    from crfmap.repro import buildinfo
+
+    facts = buildinfo.describe(data=False)
+    assert facts["python"] == platform.python_version() and facts["cores"] >= 1
+    assert "| numpy |" in facts["versions_table"] and "| 10_beyond | seed = " in facts["seeds_table"]
+    (tmp_path / "carmen").mkdir()
+    (tmp_path / "carmen" / "intel-corrected.log.gz").write_bytes(b"abc")
+    rows = {r[0]: r for r in buildinfo.data_files(tmp_path)}
+    assert rows["carmen/intel-corrected.log.gz"][2] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    assert rows["carmen/aces-corrected.log.gz"][2] == "missing"

@@ -5,7 +5,12 @@ so a number in the report is always the one the code produced:
 
 - ``{{table:NAME}}``: the Markdown table ``paper/generated/NAME.md``;
 - ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``;
-- ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``).
+- ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``);
+- ``{{build:KEY.subkey|fmt}}``: a fact about the build itself (package versions, hardware, data
+  checksums, seeds, the last run's wall clock), read when the paper is built (:mod:`crfmap.repro.buildinfo`).
+
+HTML comments (``<!-- ... -->``) are notes for the authors: they are removed before anything is filled,
+so a placeholder or a TODO inside one never reaches the report.
 
 The result is ``paper/generated/paper.md``. A placeholder whose file is missing renders as a
 visible "not generated" note, and :func:`build_paper` lists them. The paper is built only from full
@@ -28,7 +33,8 @@ from crfmap.errors import InputError
 from crfmap.io.atomic import atomic_path
 from crfmap.repro import provenance
 
-PLACEHOLDER = re.compile(r"\{\{(table|figure|number):([^}|]+)(?:\|([^}]*))?\}\}")
+COMMENT = re.compile(r"<!--.*?-->\n?", re.S)
+PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build):([^}|]+)(?:\|([^}]*))?\}\}")
 
 
 def _relative(target: Path, start: Path) -> str:
@@ -56,8 +62,23 @@ def _format_value(value, fmt=None) -> str:
 
 def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
     """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
+    build_facts: dict = {}
+
     def replace(match):
         kind, name, extra = match.group(1), match.group(2).strip(), match.group(3)
+        if kind == "build":
+            if not build_facts:
+                from crfmap.repro import buildinfo
+
+                build_facts.update(buildinfo.describe())
+            value = build_facts
+            try:
+                for k in name.split("."):
+                    value = value[k]
+            except (KeyError, TypeError):
+                missing.append(f"build fact {name}")
+                return f"*(build fact {name} not known)*"
+            return _format_value(value, extra)
         if kind == "table":
             f = paths.GENERATED / f"{name}.md"
             if not f.exists():
@@ -85,7 +106,7 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
         _check(f, strict)
         return _format_value(value, extra)
 
-    return PLACEHOLDER.sub(replace, template)
+    return PLACEHOLDER.sub(replace, COMMENT.sub("", template))
 
 
 def build_paper(template: Path | None = None, output: Path | None = None, strict: bool = True,
