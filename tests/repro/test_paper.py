@@ -122,3 +122,14 @@ def test_build_facts_describe_this_environment(tmp_path):
     rows = {r[0]: r for r in buildinfo.data_files(tmp_path)}
     assert rows["carmen/intel-corrected.log.gz"][2] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
     assert rows["carmen/aces-corrected.log.gz"][2] == "missing"
+
+
+def test_missed_goals_are_listed_from_the_generated_table(out, default_run):
+    from crfmap.repro import paper, report
+
+    report.save_table("goals_demo", ["measurement", "value", "goal"],
+                      [["kernel [Mcell/s]", 162, ">= 1000"], ["start [s]", 0.4, "<= 2"], ["redraw [s]", 0.5, "<= 0.3"]])
+    template = out / "t.md"
+    template.write_text("Missed: {{missed:goals_demo}}.\n")
+    result = paper.build_paper(template, out / "p.md", publish=False).read_text()
+    assert result == "Missed: kernel [Mcell/s]: 162, goal >= 1000; redraw [s]: 0.5, goal <= 0.3.\n"

@@ -6,6 +6,8 @@ so a number in the report is always the one the code produced:
 - ``{{table:NAME}}``: the Markdown table ``paper/generated/NAME.md``;
 - ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``;
 - ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``);
+- ``{{missed:NAME}}``: the rows of the generated table ``NAME`` (with "value" and "goal" columns)
+  whose value misses its goal (:func:`missed_goals`), as prose;
 - ``{{build:KEY.subkey|fmt}}``: a fact about the build itself (package versions, hardware, data
   checksums, seeds, the last run's wall clock), read when the paper is built (:mod:`crfmap.repro.buildinfo`).
 
@@ -34,7 +36,7 @@ from crfmap.io.atomic import atomic_path
 from crfmap.repro import provenance
 
 COMMENT = re.compile(r"<!--.*?-->\n?", re.S)
-PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build):([^}|]+)(?:\|([^}]*))?\}\}")
+PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build|missed):([^}|]+)(?:\|([^}]*))?\}\}")
 
 
 def _relative(target: Path, start: Path) -> str:
@@ -60,12 +62,49 @@ def _format_value(value, fmt=None) -> str:
     return format(value, fmt) if fmt else str(value)
 
 
+_GOAL = re.compile(r"^\s*(>=|<=)\s*([0-9.eE+-]+)")
+
+
+def missed_goals(header, rows) -> str:
+    """The rows whose value misses its goal ("<= x" or ">= x"), as "what (grid): value, goal ..." clauses.
+
+    Rows without a goal or a number are left out; "none" when every goal was met.
+
+    >>> missed_goals(["measurement", "grid", "value", "goal"],
+    ...              [["kernel [Mcell/s]", "512^2", 162, ">= 1000"], ["start [s]", "", 0.4, "<= 2"], ["x", "", None, "<= 1"]])
+    'kernel [Mcell/s] (512^2): 162, goal >= 1000'
+    """
+    value_at, goal_at = header.index("value"), header.index("goal")
+    label_at = [i for i in range(len(header)) if i not in (value_at, goal_at)]
+    missed = []
+    for row in rows:
+        goal = _GOAL.match(str(row[goal_at] or ""))
+        if not goal or not isinstance(row[value_at], (int, float)):
+            continue
+        value, bound = float(row[value_at]), float(goal.group(2))
+        if (value < bound) if goal.group(1) == ">=" else (value > bound):
+            label = " ".join(str(row[label_at[0]]).split())
+            extra = ", ".join(str(row[i]) for i in label_at[1:] if row[i])
+            missed.append(f"{label}{f' ({extra})' if extra else ''}: {row[value_at]:g}, goal {row[goal_at]}")
+    return "; ".join(missed) or "none"
+
+
 def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
     """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
     build_facts: dict = {}
 
     def replace(match):
         kind, name, extra = match.group(1), match.group(2).strip(), match.group(3)
+        if kind == "missed":
+            f = paths.GENERATED / f"{name}.json"
+            try:
+                table = json.loads(f.read_text())
+                text = missed_goals(table["header"], table["rows"])
+            except (OSError, KeyError, ValueError):
+                missing.append(f"goals of {name}")
+                return f"*(goals of {name} not generated)*"
+            _check(f, strict)
+            return text
         if kind == "build":
             if not build_facts:
                 from crfmap.repro import buildinfo
