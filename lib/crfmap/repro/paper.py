@@ -62,6 +62,26 @@ def _format_value(value, fmt=None) -> str:
     return format(value, fmt) if fmt else str(value)
 
 
+def attach_caption(table_text: str) -> str:
+    """A saved table with its caption paragraph turned into the table's own caption (pandoc's "Table:" line).
+
+    A caption written as a paragraph before the table can end a page with its table on the next; a
+    table caption stays with its table (PDF: a table figure; HTML: ``<caption>``).
+
+    >>> attach_caption("Table 1: the joint table.\\n\\n| a |\\n|---|\\n| 1 |\\n")
+    '| a |\\n|---|\\n| 1 |\\n\\nTable: Table 1: the joint table.'
+    """
+    lines = table_text.strip("\n").splitlines()
+    first_row = next((i for i, line in enumerate(lines) if line.startswith("|")), None)
+    if not first_row:
+        return "\n".join(lines)
+    caption = " ".join(" ".join(lines[:first_row]).split())
+    body = [line for line in lines[first_row:] if line.startswith("|")]
+    rest = [line for line in lines[first_row:] if not line.startswith("|")]
+    text = "\n".join(body) + f"\n\nTable: {caption}"
+    return text + ("\n\n" + "\n".join(rest).strip() if any(r.strip() for r in rest) else "")
+
+
 _GOAL = re.compile(r"^\s*(>=|<=)\s*([0-9.eE+-]+)")
 
 
@@ -124,7 +144,7 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
                 missing.append(f"table {name}")
                 return f"*(table {name} not generated)*"
             _check(f, strict)
-            return provenance.strip(f.read_text()).rstrip("\n")
+            return attach_caption(provenance.strip(f.read_text()))
         if kind == "figure":
             f = paths.FIGURES / f"{name}.png"
             if not f.exists():
@@ -143,6 +163,9 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
             missing.append(f"number {name}")
             return f"*(number {name} not generated)*"
         _check(f, strict)
+        if isinstance(value, dict):  # a mapping is a table, not a number: it must not reach the prose
+            missing.append(f"number {name} (a mapping, not a value)")
+            return f"*(number {name} is not a single value)*"
         return _format_value(value, extra)
 
     return PLACEHOLDER.sub(replace, COMMENT.sub("", template))
