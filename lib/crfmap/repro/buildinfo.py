@@ -135,11 +135,22 @@ def describe(data: bool = True) -> dict:
         "cores": os.cpu_count(),
         "memory_gb": _memory_gb(),
         "crfmap_commit": _commit(),
-        "versions_table": markdown_table(["package", "version"], package_versions()).rstrip("\n"),
-        "data_table": markdown_table(["file", "kB", "sha256", "from"], data_files()).rstrip("\n") if data else "",
-        "seeds_table": markdown_table(["notebook", "seeds"], notebook_seeds()).rstrip("\n"),
+        "versions": ", ".join(f"{name} {version}" for name, version in package_versions()),
+        "data_table": markdown_table(["file", "kB", "sha256 (in groups of 16)"],
+                                     [[name, kb, _grouped(digest)] for name, kb, digest, _ in data_files()]
+                                     ).rstrip("\n") if data else "",
+        "seeds": "; ".join(f"{notebook}: {seeds}" for notebook, seeds in notebook_seeds()),
         "wall": wall_sentence(wall),
     }
+
+
+def _grouped(digest: str, size: int = 16) -> str:
+    """A long hex digest in space-separated groups, so a narrow table column can wrap it.
+
+    >>> _grouped("0123456789abcdef0123")
+    '0123456789abcdef 0123'
+    """
+    return " ".join(digest[i:i + size] for i in range(0, len(digest), size))
 
 
 def wall_sentence(wall: dict) -> str:

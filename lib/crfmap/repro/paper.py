@@ -4,7 +4,8 @@ The template ``paper/paper.md`` holds the prose; placeholders pull in what the n
 so a number in the report is always the one the code produced:
 
 - ``{{table:NAME}}``: the Markdown table ``paper/generated/NAME.md``;
-- ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``;
+- ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``; ``{{figure:NAME|caption|width=60%}}``
+  gives its width on the page (a one-panel figure need not fill the text width);
 - ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``);
 - ``{{missed:NAME}}``: the rows of the generated table ``NAME`` (with "value" and "goal" columns)
   whose value misses its goal (:func:`missed_goals`), as prose;
@@ -109,6 +110,19 @@ def missed_goals(header, rows) -> str:
     return "; ".join(missed) or "none"
 
 
+_SIZE = re.compile(r"^\s*width=\d+%\s*$")
+
+
+def _split_size(text: str) -> tuple:
+    """A figure placeholder's "caption|width=N%" as (caption, "width=N%"); no size: (caption, "").
+
+    >>> _split_size("Fig. 20: the X.|width=45%"), _split_size("Fig. 2: a grid")
+    (('Fig. 20: the X.', 'width=45%'), ('Fig. 2: a grid', ''))
+    """
+    caption, _, size = text.rpartition("|")
+    return (caption, size.strip()) if caption and _SIZE.match(size) else (text, "")
+
+
 def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
     """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
     build_facts: dict = {}
@@ -151,8 +165,8 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
                 missing.append(f"figure {name}")
                 return f"*(figure {name} not generated)*"
             _check(f, strict)
-            caption = extra or name
-            return f"![{caption}]({_relative(f, out_dir)})"
+            caption, size = _split_size(extra or name)
+            return f"![{caption}]({_relative(f, out_dir)})" + (f"{{{size}}}" if size else "")
         file_name, *keys = name.split(".")
         f = paths.GENERATED / f"{file_name}.json"
         try:
