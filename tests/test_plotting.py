@@ -22,12 +22,13 @@ def test_colour_bars_do_not_run_into_the_next_panel(layout):
         show_grid(ax, grid, f"panel {k} with a title")
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
-    bars = [a for a in fig.axes if a not in axes]
+    bars = [child for ax in axes for child in ax.child_axes]  # each panel's bar lives in its own coordinates
     assert len(bars) == 3
     for bar, right_neighbour in zip(bars[:2], axes[1:]):
         assert not _boxes_overlap(bar.get_tightbbox(renderer), right_neighbour.get_tightbbox(renderer))
-    for ax, bar in zip(axes, bars):  # the bar does not cover its own panel's title
+    for ax, bar in zip(axes, bars):  # the bar does not reach its own panel's title, and is as tall as the grid
         assert not _boxes_overlap(bar.get_tightbbox(renderer), ax.title.get_window_extent(renderer))
+        assert bar.get_position().height == pytest.approx(ax.get_position().height)
     plt.close(fig)
 
 

@@ -55,8 +55,8 @@ def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = T
     >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
     >>> fig, ax = plt.subplots()
     >>> im = show_grid(ax, OccupancyGrid(np.array([[0.0, 0.25], [0.5, 1.0]]), 0.1))
-    >>> ax.get_xlabel(), len(fig.axes)
-    ('x [m] (cells of 0.1 m)', 2)
+    >>> ax.get_xlabel(), len(ax.child_axes)
+    ('x [m] (cells of 0.1 m)', 1)
     """
     if isinstance(grid, OccupancyGrid):
         data = grid.probability
@@ -97,7 +97,8 @@ def _label_bar(bar):
 def occupancy_colorbar(im, ax):
     """A slim colour bar beside one grid: short tick labels (0 .25 .5 .75 1) and "P(occupied)".
 
-    Short labels keep the bar inside the gap to the next panel of a grid of subplots.
+    Short labels keep the bar inside the gap to the next panel of a grid of subplots; the bar is as tall
+    as the grid itself, so it never reaches up beside the panel's title.
 
     >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
     >>> fig, ax = plt.subplots()
@@ -105,7 +106,11 @@ def occupancy_colorbar(im, ax):
     >>> [t.get_text() for t in bar.ax.get_yticklabels()], bar.ax.get_ylabel()
     (['0', '.25', '.5', '.75', '1'], 'P(occupied)')
     """
-    return _label_bar(ax.figure.colorbar(im, ax=ax, fraction=0.046, pad=0.02, aspect=30))
+    # The bar lives in the panel's own coordinates: exactly as tall as the drawn grid (an equal-aspect grid is
+    # shorter than its slot, where a slot-high bar would reach up beside the title), and the layout engines
+    # count it as part of the panel.
+    bar_axes = ax.inset_axes([1.03, 0.0, 0.045, 1.0])
+    return _label_bar(ax.figure.colorbar(im, cax=bar_axes))
 
 
 def shared_colorbar(fig, im, axes, orientation: str = "vertical"):
