@@ -1,18 +1,27 @@
 """Drawing grids and curves the same way everywhere (ROS orientation: row 0 at the bottom).
 
-Occupancy is drawn with a perceptual colour map (:data:`OCCUPANCY_CMAP`, matplotlib's
-``magma_r``): free is pale, occupied black, and the in-between values the arctan grid is
-made of (0.25, 0.5 unknown, 0.75) get clearly different hues instead of three close greys.
-Every grid gets a labelled colour bar unless ``colorbar=False``.
+Occupancy is drawn with :data:`OCCUPANCY_CMAP`: free is near white, unknown (0.5) a mid grey as in
+rviz, occupied black, and lightness falls monotonically from free to occupied (it prints in grey).
+The levels the arctan grid is made of get distinct hues: 0.25 (a cell passed once) light blue,
+0.5 grey, 0.75 (a wall hit once) dark red -- far from the unknown grey in both hue and lightness,
+so single-hit walls stand out against unseen space.
+Every grid gets a compact colour bar unless ``colorbar=False`` (:func:`occupancy_colorbar`); a
+figure of several grids can share one (:func:`shared_colorbar`). Both keep their labels short, so
+they do not run into a neighbouring panel's axis label.
 """
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.colors import LinearSegmentedColormap
 
 from crfmap.grid import OccupancyGrid
 
-OCCUPANCY_CMAP = "magma_r"  # perceptually uniform, monotone in lightness: pale = free, black = occupied
+# P(occupied) -> colour; lightness (CIELAB L*) about 99, 86, 58, 33, 0 at the five nodes.
+OCCUPANCY_CMAP = LinearSegmentedColormap.from_list("crfmap_occupancy", [
+    (0.0, "#fcfcf5"), (0.25, "#bdd7ee"), (0.5, "#8c8c8c"), (0.75, "#a50f15"), (1.0, "#000000")])
 OCCUPANCY_TICKS = (0.0, 0.25, 0.5, 0.75, 1.0)
+OCCUPANCY_TICK_LABELS = ("0", ".25", ".5", ".75", "1")
+COLORBAR_LABEL = "P(occupied)"
 # Above this many cells on a side a page-size figure shows fewer pixels than cells: sampling would drop
 # one-cell walls, so the grid is pooled for display (display_pool), walls kept.
 _DOWNSAMPLE_CELLS = 400
@@ -37,17 +46,17 @@ def display_pool(p, k: int) -> np.ndarray:
 
 
 def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = True, **kwargs):
-    """Draw P(occupied) (free pale, occupied black, unknown 0.5 magenta); y up, as in rviz.
+    """Draw P(occupied) (free near white, unknown 0.5 grey, occupied black); y up, as in rviz.
 
     ``cells=True`` labels axes in cells instead of metres; in metres the axis labels give the
     cell size, so a length in cells can be read off either way. ``colorbar=True`` (default)
-    adds a colour bar labelled P(occupied) with ticks at 0, 0.25, 0.5, 0.75 and 1.
+    adds a slim colour bar labelled P(occupied) with ticks at 0, 0.25, 0.5, 0.75 and 1.
 
     >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
     >>> fig, ax = plt.subplots()
     >>> im = show_grid(ax, OccupancyGrid(np.array([[0.0, 0.25], [0.5, 1.0]]), 0.1))
-    >>> ax.get_xlabel(), len(fig.axes)
-    ('x [m] (cells of 0.1 m)', 2)
+    >>> ax.get_xlabel(), len(ax.child_axes)
+    ('x [m] (cells of 0.1 m)', 1)
     """
     if isinstance(grid, OccupancyGrid):
         data = grid.probability
@@ -74,18 +83,69 @@ def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = T
         ax.set_xlabel(f"x [m] (cells of {resolution:g} m)")
         ax.set_ylabel("y [m]")
     if colorbar:
-        bar = ax.figure.colorbar(im, ax=ax, fraction=0.046, pad=0.04, ticks=OCCUPANCY_TICKS)
-        bar.set_label("P(occupied)")
-        bar.ax.set_yticklabels(["0 free", "0.25", "0.5 unknown", "0.75", "1 occupied"])
+        occupancy_colorbar(im, ax)
     return im
 
 
+def _label_bar(bar):
+    bar.set_ticks(OCCUPANCY_TICKS, labels=OCCUPANCY_TICK_LABELS)
+    bar.ax.tick_params(labelsize="small", length=2, pad=1)
+    bar.set_label(COLORBAR_LABEL, fontsize="small", labelpad=1)
+    return bar
+
+
+def occupancy_colorbar(im, ax):
+    """A slim colour bar beside one grid: short tick labels (0 .25 .5 .75 1) and "P(occupied)".
+
+    Short labels keep the bar inside the gap to the next panel of a grid of subplots; the bar is as tall
+    as the grid itself, so it never reaches up beside the panel's title.
+
+    >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
+    >>> fig, ax = plt.subplots()
+    >>> bar = occupancy_colorbar(ax.imshow(np.eye(2), cmap=OCCUPANCY_CMAP, vmin=0, vmax=1), ax)
+    >>> [t.get_text() for t in bar.ax.get_yticklabels()], bar.ax.get_ylabel()
+    (['0', '.25', '.5', '.75', '1'], 'P(occupied)')
+    """
+    # The bar lives in the panel's own coordinates: exactly as tall as the drawn grid (an equal-aspect grid is
+    # shorter than its slot, where a slot-high bar would reach up beside the title), and the layout engines
+    # count it as part of the panel.
+    bar_axes = ax.inset_axes([1.03, 0.0, 0.045, 1.0])
+    return _label_bar(ax.figure.colorbar(im, cax=bar_axes))
+
+
+def shared_colorbar(fig, im, axes, orientation: str = "vertical"):
+    """One colour bar for several grid panels (pass ``colorbar=False`` to :func:`show_grid` for each).
+
+    With several panels in a row a shared bar at the right (or, ``orientation="horizontal"``, below)
+    leaves every panel its full width and no label between panels.
+    """
+    bar = fig.colorbar(im, ax=list(np.ravel(axes)), orientation=orientation, fraction=0.03, pad=0.02, aspect=40)
+    if orientation == "horizontal":
+        bar.set_ticks(OCCUPANCY_TICKS, labels=OCCUPANCY_TICK_LABELS)
+        bar.ax.tick_params(labelsize="small", length=2, pad=1)
+        bar.set_label(COLORBAR_LABEL, fontsize="small", labelpad=1)
+        return bar
+    return _label_bar(bar)
+
+
 def plot_roc(ax, curves: dict, title: str = "ROC"):
-    """``curves``: label -> (fpr, tpr[, auc]). Draws them with the chance diagonal."""
-    for label, curve in curves.items():
+    """``curves``: label -> (fpr, tpr[, auc]). Draws them with the chance diagonal.
+
+    Curves that coincide would hide each other: each gets its own dash pattern, and later curves are
+    drawn thinner on top of earlier ones, so every curve stays visible.
+
+    >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
+    >>> fig, ax = plt.subplots()
+    >>> plot_roc(ax, {"a": ([0, 1], [0, 1]), "b": ([0, 1], [0, 1], 0.5)})
+    >>> [(l.get_linestyle(), l.get_linewidth()) for l in ax.get_lines()[:2]]
+    [('-', 2.6), ('--', 2.0)]
+    """
+    styles = ("-", "--", "-.", ":")
+    for k, (label, curve) in enumerate(curves.items()):
         fpr, tpr = curve[0], curve[1]
         text = f"{label} (AUC {curve[2]:.3f})" if len(curve) > 2 else label
-        ax.plot(fpr, tpr, label=text)
+        ax.plot(fpr, tpr, label=text, linestyle=styles[k % len(styles)], linewidth=max(2.6 - 0.6 * k, 1.0),
+                zorder=2 + k)
     ax.plot([0, 1], [0, 1], color="0.7", linestyle=":", linewidth=1)
     ax.set_xlabel("false positive rate")
     ax.set_ylabel("true positive rate")

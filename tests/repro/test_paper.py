@@ -94,3 +94,42 @@ def test_a_result_without_a_run_record_is_refused(out):
     with pytest.raises(InputError, match=r"old.md: records no run parameters"):
         paper.build_paper(template, out / "p.md")
     assert paper.build_paper(template, out / "p.md", strict=False).read_text().startswith("| a |")
+
+
+def test_build_facts_fill_their_placeholders_and_comments_never_reach_the_report(out, monkeypatch):
+    from crfmap.repro import buildinfo, paper
+
+    monkeypatch.setattr(buildinfo, "describe", lambda data=True: {"python": "3.11.7", "wall": "it took a while"})
+    template = out / "t.md"
+    template.write_text("Python {{build:python}}; {{build:wall}}.\n<!-- TODO(lead): {{table:absent}} -->\n"
+                        "{{build:nothing.here}}\n")
+    result = paper.build_paper(template, out / "p.md", publish=False).read_text()
+    assert result.startswith("Python 3.11.7; it took a while.\n")
+    assert "TODO" not in result and "table absent" not in result  # the comment's placeholder was not filled
+    assert "build fact nothing.here not known" in result and "Not generated when this report was built" in result
+
+
+def test_build_facts_describe_this_environment(tmp_path):
+    import platform
+
+    from crfmap.repro import buildinfo
+
+    facts = buildinfo.describe(data=False)
+    assert facts["python"] == platform.python_version() and facts["cores"] >= 1
+    assert "numpy " in facts["versions"] and "10_beyond: seed = " in facts["seeds"]
+    (tmp_path / "carmen").mkdir()
+    (tmp_path / "carmen" / "intel-corrected.log.gz").write_bytes(b"abc")
+    rows = {r[0]: r for r in buildinfo.data_files(tmp_path)}
+    assert rows["carmen/intel-corrected.log.gz"][2] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    assert rows["carmen/aces-corrected.log.gz"][2] == "missing"
+
+
+def test_missed_goals_are_listed_from_the_generated_table(out, default_run):
+    from crfmap.repro import paper, report
+
+    report.save_table("goals_demo", ["measurement", "value", "goal"],
+                      [["kernel [Mcell/s]", 162, ">= 1000"], ["start [s]", 0.4, "<= 2"], ["redraw [s]", 0.5, "<= 0.3"]])
+    template = out / "t.md"
+    template.write_text("Missed: {{missed:goals_demo}}.\n")
+    result = paper.build_paper(template, out / "p.md", publish=False).read_text()
+    assert result == "Missed: kernel [Mcell/s]: 162, goal >= 1000; redraw [s]: 0.5, goal <= 0.3.\n"

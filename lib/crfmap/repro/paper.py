@@ -4,8 +4,16 @@ The template ``paper/paper.md`` holds the prose; placeholders pull in what the n
 so a number in the report is always the one the code produced:
 
 - ``{{table:NAME}}``: the Markdown table ``paper/generated/NAME.md``;
-- ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``;
-- ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``).
+- ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``; ``{{figure:NAME|caption|width=60%}}``
+  gives its width on the page (a one-panel figure need not fill the text width);
+- ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``);
+- ``{{missed:NAME}}``: the rows of the generated table ``NAME`` (with "value" and "goal" columns)
+  whose value misses its goal (:func:`missed_goals`), as prose;
+- ``{{build:KEY.subkey|fmt}}``: a fact about the build itself (package versions, hardware, data
+  checksums, seeds, the last run's wall clock), read when the paper is built (:mod:`crfmap.repro.buildinfo`).
+
+HTML comments (``<!-- ... -->``) are notes for the authors: they are removed before anything is filled,
+so a placeholder or a TODO inside one never reaches the report.
 
 The result is ``paper/generated/paper.md``. A placeholder whose file is missing renders as a
 visible "not generated" note, and :func:`build_paper` lists them. The paper is built only from full
@@ -28,7 +36,8 @@ from crfmap.errors import InputError
 from crfmap.io.atomic import atomic_path
 from crfmap.repro import provenance
 
-PLACEHOLDER = re.compile(r"\{\{(table|figure|number):([^}|]+)(?:\|([^}]*))?\}\}")
+COMMENT = re.compile(r"<!--.*?-->\n?", re.S)
+PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build|missed):([^}|]+)(?:\|([^}]*))?\}\}")
 
 
 def _relative(target: Path, start: Path) -> str:
@@ -54,25 +63,110 @@ def _format_value(value, fmt=None) -> str:
     return format(value, fmt) if fmt else str(value)
 
 
+def attach_caption(table_text: str) -> str:
+    """A saved table with its caption paragraph turned into the table's own caption (pandoc's "Table:" line).
+
+    A caption written as a paragraph before the table can end a page with its table on the next; a
+    table caption stays with its table (PDF: a table figure; HTML: ``<caption>``).
+
+    >>> attach_caption("Table 1: the joint table.\\n\\n| a |\\n|---|\\n| 1 |\\n")
+    '| a |\\n|---|\\n| 1 |\\n\\nTable: Table 1: the joint table.'
+    """
+    lines = table_text.strip("\n").splitlines()
+    first_row = next((i for i, line in enumerate(lines) if line.startswith("|")), None)
+    if not first_row:
+        return "\n".join(lines)
+    caption = " ".join(" ".join(lines[:first_row]).split())
+    body = [line for line in lines[first_row:] if line.startswith("|")]
+    rest = [line for line in lines[first_row:] if not line.startswith("|")]
+    text = "\n".join(body) + f"\n\nTable: {caption}"
+    return text + ("\n\n" + "\n".join(rest).strip() if any(r.strip() for r in rest) else "")
+
+
+_GOAL = re.compile(r"^\s*(>=|<=)\s*([0-9.eE+-]+)")
+
+
+def missed_goals(header, rows) -> str:
+    """The rows whose value misses its goal ("<= x" or ">= x"), as "what (grid): value, goal ..." clauses.
+
+    Rows without a goal or a number are left out; "none" when every goal was met.
+
+    >>> missed_goals(["measurement", "grid", "value", "goal"],
+    ...              [["kernel [Mcell/s]", "512^2", 162, ">= 1000"], ["start [s]", "", 0.4, "<= 2"], ["x", "", None, "<= 1"]])
+    'kernel [Mcell/s] (512^2): 162, goal >= 1000'
+    """
+    value_at, goal_at = header.index("value"), header.index("goal")
+    label_at = [i for i in range(len(header)) if i not in (value_at, goal_at)]
+    missed = []
+    for row in rows:
+        goal = _GOAL.match(str(row[goal_at] or ""))
+        if not goal or not isinstance(row[value_at], (int, float)):
+            continue
+        value, bound = float(row[value_at]), float(goal.group(2))
+        if (value < bound) if goal.group(1) == ">=" else (value > bound):
+            label = " ".join(str(row[label_at[0]]).split())
+            extra = ", ".join(str(row[i]) for i in label_at[1:] if row[i])
+            missed.append(f"{label}{f' ({extra})' if extra else ''}: {row[value_at]:g}, goal {row[goal_at]}")
+    return "; ".join(missed) or "none"
+
+
+_SIZE = re.compile(r"^\s*width=\d+%\s*$")
+
+
+def _split_size(text: str) -> tuple:
+    """A figure placeholder's "caption|width=N%" as (caption, "width=N%"); no size: (caption, "").
+
+    >>> _split_size("Fig. 20: the X.|width=45%"), _split_size("Fig. 2: a grid")
+    (('Fig. 20: the X.', 'width=45%'), ('Fig. 2: a grid', ''))
+    """
+    caption, _, size = text.rpartition("|")
+    return (caption, size.strip()) if caption and _SIZE.match(size) else (text, "")
+
+
 def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
     """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
+    build_facts: dict = {}
+
     def replace(match):
         kind, name, extra = match.group(1), match.group(2).strip(), match.group(3)
+        if kind == "missed":
+            f = paths.GENERATED / f"{name}.json"
+            try:
+                table = json.loads(f.read_text())
+                text = missed_goals(table["header"], table["rows"])
+            except (OSError, KeyError, ValueError):
+                missing.append(f"goals of {name}")
+                return f"*(goals of {name} not generated)*"
+            _check(f, strict)
+            return text
+        if kind == "build":
+            if not build_facts:
+                from crfmap.repro import buildinfo
+
+                build_facts.update(buildinfo.describe())
+            value = build_facts
+            try:
+                for k in name.split("."):
+                    value = value[k]
+            except (KeyError, TypeError):
+                missing.append(f"build fact {name}")
+                return f"*(build fact {name} not known)*"
+            return _format_value(value, extra)
         if kind == "table":
             f = paths.GENERATED / f"{name}.md"
             if not f.exists():
                 missing.append(f"table {name}")
                 return f"*(table {name} not generated)*"
             _check(f, strict)
-            return provenance.strip(f.read_text()).rstrip("\n")
+            return attach_caption(provenance.strip(f.read_text()))
         if kind == "figure":
             f = paths.FIGURES / f"{name}.png"
             if not f.exists():
                 missing.append(f"figure {name}")
                 return f"*(figure {name} not generated)*"
             _check(f, strict)
-            caption = extra or name
-            return f"![{caption}]({_relative(f, out_dir)})"
+            caption, size = _split_size(extra or name)
+            return f"![{caption}]({_relative(f, out_dir)})" + (f"{{{size}}}" if size else "")
         file_name, *keys = name.split(".")
         f = paths.GENERATED / f"{file_name}.json"
         try:
@@ -83,9 +177,12 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
             missing.append(f"number {name}")
             return f"*(number {name} not generated)*"
         _check(f, strict)
+        if isinstance(value, dict):  # a mapping is a table, not a number: it must not reach the prose
+            missing.append(f"number {name} (a mapping, not a value)")
+            return f"*(number {name} is not a single value)*"
         return _format_value(value, extra)
 
-    return PLACEHOLDER.sub(replace, template)
+    return PLACEHOLDER.sub(replace, COMMENT.sub("", template))
 
 
 def build_paper(template: Path | None = None, output: Path | None = None, strict: bool = True,

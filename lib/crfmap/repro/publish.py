@@ -37,6 +37,11 @@ TYPST_HEADER = """\
 #set par(justify: true)
 #set figure(numbering: none)
 #show figure.caption: set text(size: 8.5pt)
+// Images float to the top or bottom of a page instead of leaving the rest of a page blank; tables stay in the
+// text's order, their caption above them and kept with them, and may continue on the next page.
+#show figure.where(kind: image): set figure(placement: auto)
+#show figure.where(kind: table): set figure.caption(position: top)
+#show figure.where(kind: table): set block(breakable: true)
 #show table: set text(size: 6.5pt)
 #show table.cell: set par(justify: false)
 #set table(inset: 3pt)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -85,11 +86,20 @@ def format_cell(value, digits: int = 4) -> str:
     return str(value)
 
 
+def escape_cell(text: str) -> str:
+    """A cell's text safe inside a Markdown table row: a raw "|" would end the cell, a newline the row.
+
+    >>> escape_cell("P(occ | N = 0.8)")
+    'P(occ \\\\| N = 0.8)'
+    """
+    return re.sub(r"(?<!\\)\|", r"\\|", str(text)).replace("\n", " ")
+
+
 def markdown_table(header, rows, digits: int = 4) -> str:
-    """A GitHub-flavoured Markdown table."""
-    lines = ["| " + " | ".join(str(h) for h in header) + " |", "|" + "---|" * len(header)]
+    """A GitHub-flavoured Markdown table (cells escaped: :func:`escape_cell`)."""
+    lines = ["| " + " | ".join(escape_cell(h) for h in header) + " |", "|" + "---|" * len(header)]
     for row in rows:
-        lines.append("| " + " | ".join(format_cell(v, digits) for v in row) + " |")
+        lines.append("| " + " | ".join(escape_cell(format_cell(v, digits)) for v in row) + " |")
     return "\n".join(lines) + "\n"
 
 
