@@ -17,7 +17,7 @@ from crfmap.errors import InputError
 
 PEERS = ("octomap", "hilbert")
 
-# How crfmap.mapping.hilbert's constants were chosen: hilbert_search on the Intel log's scan split at 5 cm
+# How crfmap.mapping.hilbert's constants were chosen: peer_search.hilbert_search on the Intel log's scan split at 5 cm
 # (even scans fit, odd scans score; nothing else seen), 2026-12-02. Columns: feature spacing [m], length
 # scale [m], free-point spacing [m], Brier (all observed cells), log-loss, AUC, wall recall, fit seconds
 # (on a shared, loaded 2-core machine). Rule: the lowest Brier among fits under a minute on Intel here.
@@ -83,23 +83,3 @@ def peer_rows(split, methods=PEERS, progress=False) -> tuple[dict, dict]:
         predictions[name] = _ROWS[name](split, progress=progress) if name == "hilbert" else _ROWS[name](split)
         seconds[name] = time.perf_counter() - start
     return predictions, seconds
-
-
-def hilbert_search(split, configs, progress=False) -> list:
-    """Scan-split scores of the Hilbert map for each (feature_spacing, length_scale, free_spacing) [m] in ``configs``.
-
-    How :mod:`crfmap.mapping.hilbert`'s constants were chosen, on the Intel log only (its record:
-    :data:`HILBERT_SEARCH_INTEL`).
-    """
-    from crfmap.assess.scansplit import score
-
-    rows = []
-    for spacing, scale, free in configs:
-        start = time.perf_counter()
-        p = hilbert_row(split, progress=progress, feature_spacing=spacing, length_scale=scale, free_spacing=free)
-        s = score(split, {"h": p}, n_boot=0)["h"]
-        rows.append({"feature_spacing": spacing, "length_scale": scale, "free_spacing": free,
-                     "seconds": time.perf_counter() - start, "brier_all": s["all"]["brier"],
-                     "brier_unseen": s["unseen"]["brier"], "logloss_all": s["all"]["logloss"],
-                     "auc_all": s["all"]["auc"], "wall_recall": s["all"]["wall_recall"]})
-    return rows

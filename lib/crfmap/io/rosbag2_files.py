@@ -164,11 +164,11 @@ def _write_sqlite3(path, messages, topics, distro, metadata):
 def _write_mcap(path, messages, topics, distro, metadata):
     from mcap.writer import CompressionType, Writer
 
-    from crfmap import __version__
+    from importlib.metadata import version
 
     with open(path, "wb") as f:
         writer = Writer(f, compression=CompressionType.NONE)
-        writer.start(profile="ros2", library=f"crfmap {__version__} (python mcap)")
+        writer.start(profile="ros2", library=f"crfmap {version('crfmap')} (python mcap)")
         if distro == "humble":  # MCAPStorage::ensure_rosdistro_metadata_added, at open
             writer.add_metadata("rosbag2", {"ROS_DISTRO": distro})
         schemas, channels = {}, {}
