@@ -134,7 +134,7 @@ def _bad(tmp_path):
     (["infer", "{d}/good.npy", "{d}/o.npy", "--pairing", "oriented"], ["--pairing", "certainty preset"]),
     (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "thesis", "--pairing", "receiver"], ["--pairing", "thesis"]),
     (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "thesis", "--hidden", "4,1,1,4"], ["--preset", "custom"]),
-    (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "nope"], ["--preset", "certainty, thesis"]),
+    (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "nope"], ["--preset", "certainty", "thesis"]),
     (["metrics", "{d}/good.npy", "{d}/other.npy"], ["shape"]),
 ])
 def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, args, words):

@@ -14,7 +14,7 @@ import sys
 def attach(package: str, api: dict) -> tuple:
     """(``__getattr__``, ``__dir__``, ``__all__``) for the package named ``package`` exposing ``api``.
 
-    >>> getattr_, dir_, all_ = attach("crfmap.crf", {"infer": "lbp"})
+    >>> getattr_, dir_, all_ = attach("crfmap.crf", {"infer": "inference.lbp"})
     >>> getattr_("infer").__name__, all_
     ('infer', ['infer'])
     """

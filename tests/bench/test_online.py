@@ -2,7 +2,7 @@
 import pytest
 
 from crfmap import paths
-from crfmap.bench.suite import INTEL
+from crfmap.bench.common import INTEL
 from crfmap.bench.online import bench_online
 
 

@@ -151,15 +151,19 @@ def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles
     for max_iter in range(40, 400, 3):
         block = F.PackedBlock(h, w, np.float64, tables, MESSAGE_FLOOR)
         block.set_unary(obs, np.eye(2))
-        passes = []
-        run_pass = block.run_pass
+        passes = []  # (whole grid?, the pass's measured change), one per pass block.run makes
+        plan, measured = block._pass, block._pass_change
 
-        def logged(n, threads, measure=True, active=None, per_tile=True):
-            out = run_pass(n, threads, measure=measure, active=active, per_tile=per_tile)  # noqa: B023
-            passes.append((active is None, out[0]))  # noqa: B023 (this iteration's lists)
+        def planned(n, threads, measure, active):
+            passes.append([active is None, None])  # noqa: B023 (this iteration's list)
+            return plan(n, threads, measure, active)  # noqa: B023
+
+        def logged(cb, measure, per_tile):
+            out = measured(cb, measure, per_tile)  # noqa: B023
+            passes[-1][1] = out[0]  # noqa: B023
             return out
 
-        block.run_pass = logged
+        block._pass, block._pass_change = planned, logged
         changes = block.run(max_iter, tol, threads=1, block=8, freeze=1e-8)
         whole_grid, last = passes[-1]
         if not whole_grid and last < tol:
@@ -187,12 +191,20 @@ def test_blocks_measure_their_last_iteration_and_grow_after_a_warm_start():
     assert np.flatnonzero(np.isfinite(w.max_change)).tolist() == [0, 2, 6, 14, 19]
 
 
-@pytest.mark.parametrize("kwargs, word", [
+@pytest.mark.parametrize("settings, word", [
     ({"kernel": "gpu"}, "kernel"),
-    ({"kernel": "fast", "schedule": "flooding"}, "kernel"),
-    ({"kernel": "fast", "damping": 0.5}, "kernel"),
+    ({"kernel": "fast", "damping": 0.5}, "damping"),
     ({"block": 0}, "block"),
-    ({"freeze": 1.0}, "freeze"),
+    ({"kernel": "plain", "block": 4}, "block"),
+    ({"damping": 0.5, "freeze": 1e-9}, "freeze"),
+])
+def test_bad_fast_settings_are_named(settings, word):
+    with pytest.raises(InputError, match=word):
+        infer(np.full((3, 3), 0.5), schedule=Checkerboard(**settings))
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    ({"schedule": Checkerboard(freeze=1.0)}, "freeze"),  # must be below tol
     ({"threads": 0}, "threads"),
 ])
 def test_bad_fast_arguments_are_named(kwargs, word):

@@ -91,7 +91,8 @@ def test_beam_samples_and_grid():
     (p1, l1), (p2, l2) = beam_samples(s, free_spacing=0.25)
     np.testing.assert_allclose(p1, [[1, 0], [0.25, 0], [0.5, 0], [0.75, 0]], atol=1e-12)  # the no-return: nothing
     assert l1.tolist() == [1, 0, 0, 0] and l2.tolist() == [1, 0]  # 0.05 < range_min is dropped
-    g = hilbert_grid(s, 0.1, (-0.5, -0.5, 1.5, 1.5), feature_spacing=0.2, length_scale=0.2)
+    # settings of this tiny case (the defaults are tuned for 5 cm grids of real logs)
+    g = hilbert_grid(s, 0.1, (-0.5, -0.5, 1.5, 1.5), feature_spacing=0.2, length_scale=0.2, free_spacing=0.25)
     assert g.probability.shape == (20, 20) and g.meta["scans"] == 2
     assert g.probability[5, 15] > 0.5 > g.probability[5, 9]  # the wall at x = 1, free space before it
     with pytest.raises(InputError, match="labels"):

@@ -60,13 +60,15 @@ def bench_node_refine(quick=False, repeats=3):
         env = dict(os.environ, CYCLONEDDS_URI=config.as_uri(), ROS_DOMAIN_ID=str(200 + os.getpid() % 30))
         previous = {k: os.environ.get(k) for k in ("CYCLONEDDS_URI", "ROS_DOMAIN_ID")}
         os.environ.update({k: env[k] for k in previous})
+        log = open(Path(tmp) / "node.log", "w+")
         node = subprocess.Popen([sys.executable, "-m", "crfmap", "node", "refine", "--period", "0"], env=env,
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=log)
         try:
-            return [_time_refine(name, grid, repeats) for name, grid in maps.items()]
+            return [_time_refine(name, grid, repeats, node, log) for name, grid in maps.items()]
         finally:
             node.send_signal(signal.SIGTERM)
             node.wait(timeout=TIMEOUT)
+            log.close()
             for k, v in previous.items():
                 if v is None:
                     os.environ.pop(k, None)
@@ -74,7 +76,17 @@ def bench_node_refine(quick=False, repeats=3):
                     os.environ[k] = v
 
 
-def _time_refine(name, grid, repeats):
+def _node_failed(node, log, name, grid):
+    """The row saying the node process ended before answering (its last log line), or None while it runs."""
+    if node.poll() is None:
+        return None
+    log.seek(0)
+    lines = [line.strip() for line in log.read().splitlines() if line.strip()]
+    return record(f"node-refine-{name}", grid.width, np.float64, 1, None,
+                  note=f"the node exited with code {node.returncode}: {lines[-1] if lines else 'no output'}")
+
+
+def _time_refine(name, grid, repeats, node, log):
     from cyclonedds.domain import DomainParticipant
     from cyclonedds.pub import DataWriter
     from cyclonedds.sub import DataReader
@@ -90,6 +102,8 @@ def _time_refine(name, grid, repeats):
                         qos=dds_qos(qos.MAP, reader=True))
     deadline = time.monotonic() + TIMEOUT
     while not writer.get_matched_subscriptions() and time.monotonic() < deadline:
+        if (failed := _node_failed(node, log, name, grid)) is not None:
+            return failed
         time.sleep(0.05)
     seconds = []
     for k in range(repeats + 1):  # the first loads the kernels
@@ -103,6 +117,8 @@ def _time_refine(name, grid, repeats):
                 s = sample.header.stamp
                 if s.sec * 1_000_000_000 + s.nanosec == stamp:
                     got = time.perf_counter() - t0
+            if got is None and (failed := _node_failed(node, log, name, grid)) is not None:
+                return failed
             time.sleep(0.001)
         if got is None:
             return record(f"node-refine-{name}", grid.width, np.float64, 1, None, note="timed out")

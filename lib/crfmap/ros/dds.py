@@ -133,12 +133,15 @@ class DdsBackend:
         return lambda msg: writer.write(native_message(kind, msg))
 
     def spin_once(self, timeout):
+        from cyclonedds.sub import InvalidSample
         from cyclonedds.util import duration
 
         self.waitset.wait(duration(seconds=max(float(timeout), 0.0)))
         for reader, callback, batch in self.readers:
             for sample in reader.take(N=batch):
-                callback(sample)
+                # an InvalidSample carries no data: it tells of an instance state change (a publisher left)
+                if not isinstance(sample, InvalidSample):
+                    callback(sample)
 
     def close(self):
         self.readers.clear()

@@ -37,15 +37,6 @@ SLICE_SECONDS = 0.05  # map mode integrates scans for at most this long before t
 IDLE_SECONDS = 0.1  # longest wait for messages between two looks at the stop flag
 
 
-def _presets():
-    # The engine restructuring moves the presets to crfmap.crf.model.presets; either home works.
-    try:
-        from crfmap.crf.model import presets
-    except ImportError:
-        from crfmap.crf import presets
-    return presets
-
-
 def refine_grid(grid):
     """The default preset's refinement of ``grid``: what ``crfmap infer IN OUT`` computes with its defaults.
 
@@ -54,11 +45,11 @@ def refine_grid(grid):
     >>> refine_grid(g).shape
     (1, 4)
     """
-    presets = _presets()
-    preset = presets.get_preset(presets.DEFAULT_PRESET)
-    # crfmap infer's defaults (its options --schedule, --max-iter, --tol, --damping, float64)
-    return preset.refine(grid, schedule="checkerboard", max_iter=1000, tol=1e-5, damping=0.0,
-                         dtype=np.float64).beliefs
+    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+
+    # crfmap infer's defaults (its options --schedule checkerboard, --max-iter 1000, --tol 1e-5, float64)
+    return get_preset(DEFAULT_PRESET).refine(grid, schedule="checkerboard", max_iter=1000, tol=1e-5,
+                                             dtype=np.float64).beliefs
 
 
 def log_line(text):

@@ -5,7 +5,7 @@ on-disk cache holds no entry for its current source. Checking costs one small fi
 dispatcher, once per process.
 
 >>> from crfmap.crf.inference import _plain_kernels as K
->>> isinstance(needs_compiling(K._beliefs), bool)
+>>> isinstance(needs_compiling(K._checkerboard_iteration), bool)
 True
 """
 from __future__ import annotations
