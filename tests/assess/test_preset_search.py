@@ -67,8 +67,6 @@ def test_cache_is_this_search_on_intel():
             assert scored[tuple(dict(cached["best"], **{name: v})[k] for k in ps.ORDER)] >= cached["best_brier"]
 
 
-@pytest.mark.xfail(strict=True, reason="the reconstructed search on Intel returns occupied further = 0.1 and "
-                   "limit = 6 (Brier 0.01989); presets.py says 0.2 and 4 (Brier 0.01992): see issue 23's report")
 def test_preset_constants_are_what_the_search_returns():
     assert ps.preset_constants(get_preset("certainty")) == ps.load_cached()["best"]
 

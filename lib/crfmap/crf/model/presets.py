@@ -32,8 +32,8 @@ observation ``sigmoid(-limit)`` or ``sigmoid(limit)``; unknown (0.5) gives no li
 >>> p = get_preset("certainty")
 >>> u = p.observation(hits=np.array([[20, 1, 0]]), passes=np.array([[0, 0, 0]]))
 >>> [round(float(v), 3) for v in u[0]]
-[0.982, 0.818, 0.5]
->>> bool(np.allclose(p.observation(probability=0.5 + np.arctan(np.array([[19.0, 1, 0]])) / np.pi), u))
+[0.968, 0.818, 0.5]
+>>> bool(np.allclose(p.observation(probability=0.5 + np.arctan(np.array([[20.0, 1, 0]])) / np.pi), u))
 True
 """
 from __future__ import annotations
@@ -173,7 +173,7 @@ PRESETS = {
     "certainty": Preset(
         "certainty", "recommended: certainty-scaled observations (link strength follows hits - passes), coupling "
         "below critical, LBP only near observations: improves real maps, keeps walls, leaves unexplored space unknown",
-        coupling_table(0.35), scaled=True, occupied=(1.5, 0.2), free=(0.75, 0.2), limit=4.0, margin=5),
+        coupling_table(0.35), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5),
 }
 
 
