@@ -1,4 +1,5 @@
-"""The package layout: every subpackage's public API resolves, no import circles, no private names across subpackages."""
+"""The package layout: every subpackage's public API resolves, no import circles, no private names across subpackages,
+no re-export shims (a name is imported from the module that defines it)."""
 import ast
 import json
 import importlib
@@ -134,4 +135,64 @@ def test_nothing_outside_crf_imports_a_private_name_of_crf():
                 source = "\n".join(line for line in "".join(cell["source"]).splitlines()
                                    if not line.lstrip().startswith(("%", "!")))
                 offenders += [f"{path.name}: {s}" for s in _crf_private_imports(ast.parse(source))]
+    assert not offenders, "\n".join(offenders)
+
+
+def _top_level(tree):
+    """(names a module defines, {name: module} of what it imports from other crfmap modules) at its top level."""
+    defined, imported = set(), {}
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            defined.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            defined.update(e.id for t in targets for e in ast.walk(t) if isinstance(e, ast.Name))
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("crfmap"):
+            imported.update({a.asname or a.name: node.module for a in node.names})
+    return defined, imported
+
+
+def _dunder_all(tree):
+    return {e.value for node in tree.body if isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets)
+            for e in ast.walk(node.value) if isinstance(e, ast.Constant) and isinstance(e.value, str)}
+
+
+def _modules():
+    """{module name: parsed tree} of every crfmap module but the packages' ``__init__`` (their lazy public APIs)."""
+    return {_module_name(p): ast.parse(p.read_text()) for p in LIB.rglob("*.py") if p.name != "__init__.py"}
+
+
+def test_no_module_re_exports_a_name_it_imports():
+    """A crfmap name imported into a module is used there; it is not passed on (unused, or listed in ``__all__``)."""
+    offenders = []
+    for name, tree in sorted(_modules().items()):
+        _, imported = _top_level(tree)
+        used = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+        exported = _dunder_all(tree)
+        offenders += [f"{name}: {n} (from {mod})" for n, mod in sorted(imported.items())
+                      if n not in used or n in exported]
+    assert not offenders, "re-exported names (import them from their own module):\n" + "\n".join(offenders)
+
+
+def _sources(root):
+    for path in [*(root / "lib").rglob("*.py"), *(root / "tests").rglob("*.py"), *(root / "workflow").rglob("*.py")]:
+        yield str(path.relative_to(root)), path.read_text()
+    for path in sorted((root / "notebooks").glob("*.ipynb")):
+        for cell in json.loads(path.read_text())["cells"]:
+            if cell["cell_type"] == "code":
+                yield path.name, "\n".join(line for line in "".join(cell["source"]).splitlines()
+                                            if not line.lstrip().startswith(("%", "!")))
+
+
+def test_names_are_imported_from_the_module_that_defines_them():
+    """``from crfmap.x import y`` names the module defining ``y``, not one that merely imports it (lib, tests, notebooks)."""
+    tops = {name: _top_level(tree) for name, tree in _modules().items()}
+    offenders = []
+    for where, source in _sources(LIB.parents[1]):
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.ImportFrom) and node.module in tops:
+                defined, imported = tops[node.module]
+                offenders += [f"{where}:{node.lineno}: {a.name} from {node.module} (defined in {imported[a.name]})"
+                              for a in node.names if a.name not in defined and a.name in imported]
     assert not offenders, "\n".join(offenders)

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from crfmap import paths
-from crfmap.repro.reproduce import data_needed
+from crfmap.repro.dependencies import data_needed
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))

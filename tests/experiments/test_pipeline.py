@@ -3,11 +3,13 @@ import numpy as np
 import pytest
 
 from crfmap.experiments import pipeline as experiment; from crfmap.assess import metrics; from crfmap.world import scenes
+from crfmap.world.reachability import reachable
+from crfmap.world.scene import Scene
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.assess.learning import learn_thesis, lbp_mse
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
-from crfmap.sim.simulator import Laser
+from crfmap.sim.laser import Laser
 
 
 def test_truth_bounds_rebuilds_the_same_cells():
@@ -23,7 +25,7 @@ def test_exploring_with_perfect_sensors_sees_every_reachable_cell_correctly():
     scene = scenes.enclosed_boxes("train", size=20)
     observed, recording = experiment.scan_scene(scene, Laser.with_fov(360, 90), drive="explore")
     assert observed.shape == scene.truth.shape and observed.origin == scene.truth.origin
-    reach = scenes.reachable(scene.truth, scene.start)
+    reach = reachable(scene.truth, scene.start)
     known = observed.probability != 0.5
     assert known[reach].all()
     # every known cell is on the right side of 0.5
@@ -40,7 +42,7 @@ def test_looking_from_one_place_leaves_the_shadow_of_a_wall_unknown():
     cells = np.zeros((21, 21))
     cells[:, [0, -1]] = cells[[0, -1], :] = 1
     cells[8:13, 6] = 1  # a short wall east of the robot
-    scene = scenes.Scene("wall", OccupancyGrid(cells, 0.1), start=(0.35, 1.05, 0.0), default_mode="look")
+    scene = Scene("wall", OccupancyGrid(cells, 0.1), start=(0.35, 1.05, 0.0), default_mode="look")
     observed, _ = experiment.scan_scene(scene, Laser.with_fov(360, 720))
     p = observed.probability
     assert p[10, 6] > 0.5  # the wall is seen

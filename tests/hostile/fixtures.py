@@ -86,7 +86,7 @@ def small_recording(n_scans=4, n_beams=8):
 
 
 def good_bag(d, name="bag", fmt="ros2"):
-    from crfmap.io.bag_reader import write_bag
+    from crfmap.io.bag_writer import write_bag
 
     path = Path(d) / name
     write_bag(small_recording(), path, fmt=fmt)
@@ -96,7 +96,7 @@ def good_bag(d, name="bag", fmt="ros2"):
 def tf_bag(d, quaternion, name="tfbag", fmt="ros2"):
     """A bag whose /tf odom -> base_link uses ``quaternion`` (x, y, z, w) and a scan in base_link."""
 
-    from crfmap.io.bag_reader import typestore
+    from crfmap.io._rosmsgs import typestore
 
     store = typestore(fmt)
     T = store.types

@@ -9,10 +9,11 @@ from rosbags.highlevel import AnyReader
 from crfmap.commands.convert import shift_zero_start
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.io.bag_reader import write_bag
+from crfmap.io.bag_writer import write_bag
 from crfmap.io.carmen import read_carmen
-from crfmap.sim.simulator import START_TIME, Laser, simulate
-from crfmap.world.scenes import Scene
+from crfmap.sim.simulator import START_TIME, simulate
+from crfmap.sim.laser import Laser
+from crfmap.world.scene import Scene
 
 WRITERS = [("ros1", None, None), ("ros2", "mcap", "humble"), ("ros2", "sqlite3", "humble"),
            ("ros2", "mcap", "jazzy"), ("ros2", "sqlite3", "jazzy")]

@@ -7,7 +7,8 @@ from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import Stores, get_typestore
 
 from crfmap import paths
-from crfmap.io.bag_reader import read_bag, write_bag
+from crfmap.io.bag_reader import read_bag
+from crfmap.io.bag_writer import write_bag
 from crfmap.cli import main
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid

@@ -9,7 +9,8 @@ import yaml
 from rosbags.rosbag2 import Reader
 
 from crfmap.errors import InputError
-from crfmap.io.bag_reader import read_bag, write_bag
+from crfmap.io.bag_reader import read_bag
+from crfmap.io.bag_writer import write_bag
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_bag_reader import make_recording  # noqa: E402

@@ -9,7 +9,7 @@ import pytest
 
 from crfmap.grid import OccupancyGrid
 from crfmap.io.atomic import atomic_path, current_umask
-from crfmap.io.bag_reader import write_bag
+from crfmap.io.bag_writer import write_bag
 from crfmap.io.map_server import save_map
 from crfmap.io.npy_grid import save_npy
 

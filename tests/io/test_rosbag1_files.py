@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from crfmap.io.bag_reader import read_bag, write_bag
+from crfmap.io.bag_reader import read_bag
+from crfmap.io.bag_writer import write_bag
 from crfmap.io.rosbag1_files import BAG_MAGIC, file_header_record, parse_header_fields
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -314,7 +314,8 @@ def test_build_command_rejects_unknown_output_type(small_log, tmp_path, capsys):
 
 
 def test_build_command_from_a_bag_and_with_raw_odometry(small_log, tmp_path, capsys):
-    from crfmap.io.bag_reader import read_bag, write_bag
+    from crfmap.io.bag_reader import read_bag
+    from crfmap.io.bag_writer import write_bag
 
     rec = read_carmen(small_log)
     write_bag(rec, tmp_path / "bag", fmt="ros2")

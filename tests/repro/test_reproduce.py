@@ -1,6 +1,7 @@
 """crfmap.repro.reproduce: which notebooks need which shared data, and a clear stop when it is missing."""
 from crfmap import paths
-from crfmap.repro.reproduce import data_needed, main, notebooks
+from crfmap.repro.dependencies import data_needed, notebooks
+from crfmap.repro.reproduce import main
 
 
 def test_data_needed_lists_the_files_a_notebook_reads():

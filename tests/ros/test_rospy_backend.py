@@ -63,7 +63,8 @@ LISTENER = textwrap.dedent("""
 @pytest.mark.skipif(_ros1_missing() is not None, reason=str(_ros1_missing()))
 @pytest.mark.skipif(not paths.have_data(INTEL), reason="needs the shared data (CRFMAP_DATA)")
 def test_map_node_through_roscore(tmp_path):
-    from crfmap.io.bag_reader import read_bag, write_bag
+    from crfmap.io.bag_reader import read_bag
+    from crfmap.io.bag_writer import write_bag
     from crfmap.io.carmen import read_carmen
     from crfmap.mapping import OnlineMapper
     from crfmap.mapping.builder import scan_bounds

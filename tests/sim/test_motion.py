@@ -11,8 +11,9 @@ from crfmap.errors import InputError
 from crfmap.frames import wrap_angle
 from crfmap.grid import OccupancyGrid
 from crfmap.sim.motion import Motion, explore_reachable, follow_waypoints, look_around
-from crfmap.world.scenes import Scene, enclosed_boxes, occluded_walls
-from crfmap.sim.simulator import Laser
+from crfmap.world.scene import Scene
+from crfmap.world.scenes import enclosed_boxes, occluded_walls
+from crfmap.sim.laser import Laser
 
 DT, V, W = 0.1, 0.5, 1.5  # [s], [m/s], [rad/s]: the drives' defaults
 

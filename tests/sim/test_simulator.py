@@ -9,12 +9,15 @@ from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.raycast import first_hit
 from crfmap.recording import Recording
-from crfmap.world.scenes import Scene, enclosed_boxes, make_scene, office_floor, reachable, traversable
+from crfmap.world.scene import Scene
+from crfmap.world.scenes import enclosed_boxes, make_scene
+from crfmap.world.office import office_floor
+from crfmap.world.reachability import reachable, traversable
 from crfmap.sim.drives import Explore, Look, Waypoints
-from crfmap.sim.simulator import (
-    LEGACY_NO_RETURN, Laser, add_range_noise, cast_rays, compose, explore_reachable, follow_waypoints, look_around,
-    simulate,
-)
+from crfmap.sim.laser import LEGACY_NO_RETURN, Laser
+from crfmap.sim.simulator import add_range_noise, cast_rays, simulate
+from crfmap.frames import compose
+from crfmap.sim.motion import explore_reachable, follow_waypoints, look_around
 
 RES = 0.1  # [m]
 FOUR = Laser.with_fov(360, 4)  # beams at -pi, -pi/2, 0, pi/2

@@ -5,9 +5,9 @@ import pytest
 from crfmap import paths
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.world.scenes import (
-    SCENES, Scene, enclosed_boxes, make_scene, noisy_image, occluded_walls, reachable, x_image,
-)
+from crfmap.world.scenes import SCENES, enclosed_boxes, make_scene, noisy_image, occluded_walls, x_image
+from crfmap.world.scene import Scene
+from crfmap.world.reachability import reachable
 
 
 @pytest.mark.parametrize("name", list(SCENES))

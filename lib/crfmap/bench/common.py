@@ -28,12 +28,13 @@ def bench_grid(size, seed=0, kind="uniform") -> np.ndarray:
     """An observed grid of ``size`` x ``size`` cells.
 
     ``"uniform"``: P ~ U(0, 1) (throughput does not depend on the data); ``"office"``: a
-    procedural office floor at 5 cm (:func:`crfmap.world.scenes.office_floor`) seen with flip noise
+    procedural office floor at 5 cm (:func:`crfmap.world.office.office_floor`) seen with flip noise
     0.2 (P = 0.8 or 0.2): LBP with [[10, 1], [1, 10]] needs ~300 iterations at 2048 x 2048.
     """
     if kind == "uniform":
         return np.random.default_rng(seed).uniform(0.0, 1.0, (size, size))
-    from crfmap.world.scenes import noisy_image, office_floor
+    from crfmap.world.scenes import noisy_image
+    from crfmap.world.office import office_floor
 
     side = max(size, 128)  # an office needs a few metres; small grids are a corner of one
     scene = office_floor(side * 0.05, side * 0.05, 0.05, seed=seed)

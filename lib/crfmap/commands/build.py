@@ -46,7 +46,7 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, 
     if pose_source == "tf":
         raise InputError("--pose-source", "a CARMEN log has no tf; use truth (corrected poses) or odom")
     if pose_source == "odom":
-        from crfmap.io.bag_reader import interpolate_poses
+        from crfmap.frames import interpolate_poses
 
         if rec.odometry is None:
             raise InputError(path, "pose source 'odom': the log has no ODOM lines")

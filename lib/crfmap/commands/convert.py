@@ -62,7 +62,7 @@ def shift_zero_start(rec, source):
 
 
 def run(args: argparse.Namespace) -> int:
-    from crfmap.io.bag_reader import write_bag
+    from crfmap.io.bag_writer import write_bag
     from crfmap.commands.build import load_recording
 
     out = Path(args.output)

@@ -20,7 +20,8 @@ from crfmap.errors import InputError
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from crfmap.world.scenes import MODES, SCENES
+    from crfmap.world.scene import MODES
+    from crfmap.world.scenes import SCENES
 
     p = subparsers.add_parser(
         "simulate",
@@ -99,7 +100,8 @@ def build_recording(args):
     check_options(args)
     from crfmap.world.scenes import make_scene
     from crfmap.sim.drives import Explore
-    from crfmap.sim.simulator import LEGACY_NO_RETURN, START_TIME, Laser, simulate
+    from crfmap.sim.laser import LEGACY_NO_RETURN, Laser
+    from crfmap.sim.simulator import START_TIME, simulate
 
     scene_kwargs = {}
     if args.scene_seed is not None:
@@ -146,7 +148,7 @@ def run(args) -> int:
     check_options(args)
     started = time.perf_counter()
     recording = build_recording(args)
-    from crfmap.io.bag_reader import write_bag
+    from crfmap.io.bag_writer import write_bag
 
     write_bag(recording, out, fmt=args.format, **bag_kwargs)
     if not args.quiet:

@@ -52,7 +52,7 @@ _WARMED = set()  # (schedule, bounded, kernel) that ran in this process: their k
 class Observation:
     """A scene's truth and what the robot (or the noisy scan) made of it."""
 
-    scene: object  # crfmap.world.scenes.Scene
+    scene: object  # crfmap.world.scene.Scene
     observed: OccupancyGrid
     noise: float
     noise_kind: str  # "image sigma" (the X) or "range C [m]" (simulated scenes)
@@ -92,6 +92,7 @@ def _check_seed(seed):
 @lru_cache(maxsize=32)
 def _observe(scene, noise, seed):
     from crfmap.world import scenes
+    from crfmap.world.office import office_floor
 
     if scene == "x":
         made = scenes.x_image()
@@ -100,7 +101,7 @@ def _observe(scene, noise, seed):
     from crfmap.sim.simulator import simulate
 
     if scene == "office":
-        made = scenes.office_floor(*OFFICE_SIZE, resolution=OFFICE_RESOLUTION, seed=seed)
+        made = office_floor(*OFFICE_SIZE, resolution=OFFICE_RESOLUTION, seed=seed)
     else:
         made = scenes.make_scene(scene)
     truth = made.truth

@@ -38,7 +38,7 @@ from crfmap.assess.learning import LearningResult, learn_gradient, lbp_mse, resc
 from crfmap.assess.metrics import Report, evaluate, roc_curve
 from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.recording import Recording
-from crfmap.world.scenes import Scene
+from crfmap.world.scene import Scene
 
 # LBP on these 40 x 40 grids: one numba thread is faster than several (the work per
 # iteration is tiny) and keeps timings steady on a shared machine.
@@ -67,7 +67,7 @@ def scan_scene(scene: Scene, laser=None, drive=None, *, model="arctan", seed=0, 
 
     Parameters
     ----------
-    scene : crfmap.world.scenes.Scene
+    scene : crfmap.world.scene.Scene
     laser : crfmap.sim.simulator.Laser or None (the simulator's default: 360 beams, 5 m)
     drive : a drive of :mod:`crfmap.sim.drives` (``Look(turns=2)``), a mode name "look", "explore",
         "waypoints" (that drive with its defaults) or None (``scene.default_mode``)
@@ -85,7 +85,7 @@ def scan_scene(scene: Scene, laser=None, drive=None, *, model="arctan", seed=0, 
     from crfmap.sim.simulator import simulate
 
     if not isinstance(scene, Scene):
-        raise InputError("scene", f"expected a crfmap.world.scenes.Scene, got {type(scene).__name__}")
+        raise InputError("scene", f"expected a crfmap.world.scene.Scene, got {type(scene).__name__}")
     recording: Recording = simulate(scene, laser, drive, seed=seed, progress=progress, **simulate_options)
     truth = scene.truth
     observed = build_grid(recording.scans, truth.resolution, model=model, bounds=truth_bounds(truth),

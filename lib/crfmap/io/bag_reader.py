@@ -1,6 +1,6 @@
 """ROS1 and ROS2 bags <-> :class:`~crfmap.recording.Recording`, with ``rosbags`` (no ROS install).
 
-Writing is :func:`crfmap.io.bag_writer.write_bag` (importable from here too): the topics below, as
+Writing is :func:`crfmap.io.bag_writer.write_bag`: the topics below, as
 a ROS user expects them from a robot.
 
 Reading (:func:`read_bag`) places every scan in a fixed frame by composing the
@@ -11,7 +11,7 @@ interpolating the moving transforms in time and applying the static mount from
 builder's job).
 
 The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``,
-``interpolate_poses`` and ``wrap_angle`` are importable from here too); building and
+``interpolate_poses``, ``wrap_angle``); building and
 decoding the messages themselves is :mod:`crfmap.io._rosmsgs`.
 """
 from __future__ import annotations
@@ -27,11 +27,9 @@ import numpy as np
 from crfmap.io._rosmsgs import (CMD_VEL_TOPIC, MAP_TOPIC, ODOM_TOPIC, SCAN_TOPIC, T_GRID, T_ODOM, T_POSE_STAMPED, T_SCAN,
                        T_TWIST, TF_STATIC_TOPIC, TF_TOPIC, TF_TYPES, TRUTH_TOPIC, grid_from_message, pose_of,
                        to_seconds, typestore)
-from crfmap.io.bag_writer import write_bag  # noqa: F401  (bags in and out from one module, as before)
 from crfmap.checks import check_input_file, check_path_arg
 from crfmap.errors import InputError
 from crfmap.frames import TfTree, compose, interpolate_poses
-from crfmap.frames import inverse, wrap_angle  # noqa: F401  (re-exported: they predate crfmap.frames)
 from crfmap.recording import Recording, ScanSet, Trajectory
 
 POSE_SOURCES = ("auto", "tf", "odom", "truth")

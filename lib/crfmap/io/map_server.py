@@ -10,7 +10,7 @@ map_server maps
     A loaded grid holds the OccupancyGrid values the map server would publish, divided by
     100 (unknown, -1, becomes 0.5).
 
-``.npy`` grids (:mod:`crfmap.io.npy_grid`; ``save_npy``, ``load_npy`` and ``npy_sidecar_path`` are importable here too)
+``.npy`` grids (:mod:`crfmap.io.npy_grid`: ``save_npy``, ``load_npy``, ``npy_sidecar_path``)
     The float P(occupied) array itself, bit for bit, plus a small sidecar YAML
     ``<name>.npy.yaml`` holding resolution, origin and frame_id (a plain ``.npy`` cannot).
 
@@ -35,7 +35,6 @@ from crfmap.io.image_guard import check_map_image
 from crfmap.checks import check_path_arg
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.io.npy_grid import load_npy, npy_sidecar_path, save_npy  # noqa: F401  (re-exported)
 from crfmap.io.nav2_loader import DEFAULT_LOADER, LOADERS, occupancy, read_pixels
 
 MAP_MODES = ("trinary", "scale", "raw")
@@ -353,5 +352,5 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
 
 __all__ = [
     "MAP_MODES", "OCCUPIED_THRESH_DEFAULT", "FREE_THRESH_DEFAULT", "read_map_yaml", "load_map",
-    "save_map", "map_yaml_text", "grid_from_values", "LOADERS", "DEFAULT_LOADER",
+    "save_map", "map_yaml_text", "grid_from_values",
 ]

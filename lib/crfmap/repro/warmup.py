@@ -178,7 +178,8 @@ def _mapping():
 
 def _simulator():
     """The simulator with every drive, with and without noise, on the small thesis scenes."""
-    from crfmap.sim.simulator import Laser, simulate
+    from crfmap.sim.laser import Laser
+    from crfmap.sim.simulator import simulate
     from crfmap.world.scenes import enclosed_boxes, occluded_walls
 
     import numpy as np

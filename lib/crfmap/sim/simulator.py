@@ -22,8 +22,7 @@ Drives (:mod:`crfmap.sim.drives`, the ``drive`` of :func:`simulate`): :class:`Ex
 reachable cell and look around), :class:`Look` (turn in place at the start, Fig. 28) and
 :class:`Waypoints` (drive through waypoints, scanning at a fixed rate); each holds only its own
 settings, and a mode name (``"explore"``, ``"look"``, ``"waypoints"``) means its drive with the
-defaults. The drives, :class:`~crfmap.sim.motion.Motion`, ``compose`` and ``wrap_angle`` are
-importable from here too.
+defaults.
 
 >>> from crfmap.world.scenes import enclosed_boxes
 >>> rec = simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), "look", progress=False)
@@ -41,16 +40,14 @@ from numba import njit
 
 from crfmap.errors import InputError
 from crfmap.frames import compose
-from crfmap.frames import wrap_angle  # noqa: F401  (re-exported)
 from crfmap.grid import OccupancyGrid
 from crfmap.checks import check_number
-from crfmap.sim.drives import DRIVE_SETTINGS, Explore, Look, Waypoints, drive_for  # noqa: F401  (re-exported)
-from crfmap.sim.motion import ALIGNED, Motion, _integrate, explore_reachable, follow_waypoints, look_around  # noqa: F401
+from crfmap.sim.drives import DRIVE_SETTINGS, Look, drive_for
+from crfmap.sim.motion import _integrate
 from crfmap.raycast import first_hit_kernel
-from crfmap.world.reachability import pose_cell, reachable, traversable  # noqa: F401  (re-exported)
-from crfmap.sim.laser import LEGACY_NO_RETURN, Laser  # noqa: F401  (re-exported)
+from crfmap.sim.laser import Laser
 from crfmap.recording import Recording, ScanSet, Trajectory
-from crfmap.world.scenes import Scene
+from crfmap.world.scene import Scene
 
 SCAN_CHUNK = 512  # scans per progress-bar tick
 DEFAULT_LINEAR_SPEED = 0.5  # [m/s]
@@ -195,7 +192,7 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
             raise InputError(name, f"belongs to the drive: pass drive={DRIVE_SETTINGS[name]}({name}=...)")
         raise TypeError(f"simulate() got an unexpected keyword argument {name!r}")
     if not isinstance(scene, Scene):
-        raise InputError("scene", f"expected a crfmap.world.scenes.Scene, got {type(scene).__name__}")
+        raise InputError("scene", f"expected a crfmap.world.scene.Scene, got {type(scene).__name__}")
     laser = Laser() if laser is None else laser
     if not isinstance(laser, Laser):
         raise InputError("laser", f"expected a crfmap.sim.simulator.Laser, got {type(laser).__name__}")

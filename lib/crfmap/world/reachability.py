@@ -4,7 +4,7 @@ The robot is a disc of ``robot_radius`` metres (0 = the thesis's point robot, on
 A cell is traversable when the disc centred in it overlaps no occupied cell (P > 0.5;
 outside the grid counts as occupied); the robot moves between side neighbours, so it
 never slips through a diagonal gap. Functions take an :class:`~crfmap.grid.OccupancyGrid`
-or a :class:`~crfmap.world.scenes.Scene` (its ``truth``).
+or a :class:`~crfmap.world.scene.Scene` (its ``truth``).
 
 >>> occ = np.zeros((5, 5)); occ[:, 2] = 1  # a wall down the middle
 >>> reachable(OccupancyGrid(occ, 0.1), (0.05, 0.05)).sum(axis=0).tolist()

@@ -21,7 +21,7 @@ Scenes, by name (:data:`SCENES`, :func:`make_scene`):
   (:mod:`crfmap.world.office`).
 
 Where a robot can go in a scene (``traversable``, ``reachable``, ...) is
-:mod:`crfmap.world.reachability`; those names are importable from here too.
+:mod:`crfmap.world.reachability`; the :class:`~crfmap.world.scene.Scene` itself is :mod:`crfmap.world.scene`.
 
 >>> scene = occluded_walls("train")
 >>> scene.truth.shape, scene.truth.resolution
@@ -38,8 +38,7 @@ from crfmap.checks import check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.world.office import office_floor
-from crfmap.world.scene import MODES, Scene, scene_grid  # noqa: F401  (re-exported)
-from crfmap.world.reachability import footprint_offsets, pose_cell, reachable, traversable  # noqa: F401  (re-exported)
+from crfmap.world.scene import Scene, scene_grid
 
 X_IMAGE_FILE = "images/ugm_X_32x32.csv"  # 1 = white background, 0 = X stroke (UGM's X.mat)
 THESIS_SIZE = 40  # [cells] side of the thesis-style scenes
