@@ -192,7 +192,14 @@ def test_names_are_imported_from_the_module_that_defines_them():
     for where, source in _sources(LIB.parents[1]):
         for node in ast.walk(ast.parse(source)):
             if isinstance(node, ast.ImportFrom) and node.module in tops:
-                defined, imported = tops[node.module]
-                offenders += [f"{where}:{node.lineno}: {a.name} from {node.module} (defined in {imported[a.name]})"
-                              for a in node.names if a.name not in defined and a.name in imported]
+                pairs = [(node.module, a.name) for a in node.names]
+            elif isinstance(node, ast.Call) and len(node.args) >= 2 and all(
+                    isinstance(a, ast.Constant) and isinstance(a.value, str) for a in node.args[:2]):
+                pairs = [(node.args[0].value, node.args[1].value)]  # importlib-style: f("crfmap.x", "name")
+            else:
+                continue
+            for module, name in pairs:
+                defined, imported = tops.get(module, ((), {}))
+                if name not in defined and name in imported:
+                    offenders.append(f"{where}:{node.lineno}: {name} from {module} (defined in {imported[name]})")
     assert not offenders, "\n".join(offenders)

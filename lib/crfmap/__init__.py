@@ -5,8 +5,11 @@ observed layer holding the grid's P(occupied)); loopy belief propagation infers 
 cell's occupancy from its neighbours; the potentials can be learned.
 """
 from crfmap import _numba_cache  # noqa: F401  (first: a read-only install caches kernels in a user folder)
+from crfmap.environment import check_numba_threads_at_numba_import
 from crfmap.errors import CrfmapError, InputError, DataMissingError
 from crfmap.grid import OccupancyGrid, UNKNOWN
 
 __all__ = ["CrfmapError", "InputError", "DataMissingError", "OccupancyGrid", "UNKNOWN"]
 __version__ = "0.1.0"
+
+check_numba_threads_at_numba_import()  # numba reads NUMBA_NUM_THREADS once, at its import: checked then

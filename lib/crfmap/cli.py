@@ -110,9 +110,15 @@ def _run(args) -> int:
             return _fail(f"{prefix}: error: {_input_name(args)}: input nested too deeply")
         except MemoryError:
             return _fail(f"{prefix}: error: {_input_name(args)}: out of memory (a smaller input or --max-cells?)")
-    for w in caught:
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    for w in caught:  # one line each (the message names the input), not Python's "file:line: category" pair
+        print(_warning_line(prefix, w), file=sys.stderr)
     return int(status or 0)
+
+
+def _warning_line(prefix, w) -> str:
+    """``crfmap CMD: warning: MESSAGE`` (a category other than UserWarning is named: ``warning (DeprecationWarning)``)."""
+    kind = "warning" if w.category is UserWarning else f"warning ({w.category.__name__})"
+    return one_line(f"{prefix}: {kind}: {w.message}", limit=1000)
 
 
 def _fail(line, status=2) -> int:

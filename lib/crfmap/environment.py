@@ -8,7 +8,7 @@ variable               read by                          accepted
 ``CRFMAP_DATA``        :func:`crfmap.paths.data_root`   a folder (missing files are named when needed)
 ``CRFMAP_MAX_CELLS``   :func:`crfmap.checks.max_cells`  a whole number >= 1 (``4e8`` too); no "no limit"
 ``CRFMAP_RUN``         :mod:`crfmap.repro.provenance`   a JSON object (set by :mod:`crfmap.repro.run`)
-``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number >= 1
+``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number >= 1 (checked then)
 ``NUMBA_CACHE_DIR``    numba, :mod:`crfmap._numba_cache` a folder numba can write (existing or not)
 =====================  ===============================  ===========================================
 
@@ -16,14 +16,18 @@ A folder variable set but empty is refused (an empty path would mean the working
 empty number variable means unset (the shell idiom ``VAR= command``), as numba reads its own.
 Numba reads ``NUMBA_NUM_THREADS`` once, at its import, and then fails with a traceback (``0``) or
 ignores the value (``abc``): the entry points (the ``crfmap`` command, ``crfmap.repro.reproduce``,
-``crfmap.repro.run``) call :func:`check` before anything imports numba. ``XDG_CACHE_HOME``,
+``crfmap.repro.run``) call :func:`check` before anything imports numba, and ``import crfmap`` installs
+:func:`check_numba_threads_at_numba_import`, so a library user's first kernel (whatever imports numba
+first) raises crfmap's one-line :class:`~crfmap.errors.InputError` naming the variable instead. ``XDG_CACHE_HOME``,
 ``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only hints: a bad value falls back to the default.
 """
 from __future__ import annotations
 
+import importlib.abc
 import math
 import os
 import re
+import sys
 import tempfile
 from pathlib import Path
 
@@ -123,6 +127,26 @@ def numba_threads() -> int | None:
     if value < 1:
         raise InputError(_named("NUMBA_NUM_THREADS", text), "must be at least 1 (numba refuses 0)")
     return value
+
+
+class _NumbaThreadsCheck(importlib.abc.MetaPathFinder):
+    """Checks ``$NUMBA_NUM_THREADS`` when numba is first imported: numba reads it then, once."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name == "numba":
+            numba_threads()  # InputError naming the variable, not numba's traceback (0) or silence (abc)
+            if self in sys.meta_path:
+                sys.meta_path.remove(self)  # checked and good: numba reads it now, never again
+        return None  # the ordinary finders import it
+
+
+def check_numba_threads_at_numba_import() -> None:
+    """Check ``$NUMBA_NUM_THREADS`` at the moment numba is imported (``import crfmap`` calls this).
+
+    Nothing is checked when numba is imported already: it has read the variable (and started).
+    """
+    if "numba" not in sys.modules and not any(isinstance(f, _NumbaThreadsCheck) for f in sys.meta_path):
+        sys.meta_path.insert(0, _NumbaThreadsCheck())
 
 
 def numba_cache_dir() -> Path | None:

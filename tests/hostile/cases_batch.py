@@ -144,6 +144,8 @@ def _env_case(name, env, names, entry="crfmap", argv=None, subprocess=False, fau
         values = {k: v.format(d=d) for k, v in env.items()}
         if entry == "crfmap":
             command = argv or ["infer", "{d}/in.npy", "{d}/out.npy"]
+        elif entry == "library":  # import crfmap; infer(load_grid(...)) in a script of its own
+            command = argv or ["{d}/in.npy"]
         else:  # reproduce: a dry run of one quick notebook (nothing would run for long if accepted)
             command = argv or ["--quick", "--only", "02", "--dry-run"]
             values.setdefault("CRFMAP_OUTPUT_ROOT", str(Path(d) / "out"))
@@ -158,6 +160,9 @@ for _value in ("inf", "nan", "1e400", "-inf", "0.5"):
               argv=["--max-cells", _value, "infer", "{d}/in.npy", "{d}/out.npy"])
 for _value in ("abc", "0", "-1", "1.5", "2 threads"):
     _env_case(f"NUMBA_NUM_THREADS={_value}", {"NUMBA_NUM_THREADS": _value}, ["NUMBA_NUM_THREADS"], subprocess=True)
+for _value in ("abc", "0"):  # numba's own import would fail (0) or ignore it (abc): crfmap checks it first
+    _env_case(f"NUMBA_NUM_THREADS={_value}-library", {"NUMBA_NUM_THREADS": _value}, ["NUMBA_NUM_THREADS"],
+              entry="library", subprocess=True)
 _env_case("NUMBA_NUM_THREADS=0-reproduce", {"NUMBA_NUM_THREADS": "0"}, ["NUMBA_NUM_THREADS"], entry="reproduce",
           subprocess=True)
 _env_case("NUMBA_NUM_THREADS=0-run", {"NUMBA_NUM_THREADS": "0"}, ["NUMBA_NUM_THREADS"], entry="run",

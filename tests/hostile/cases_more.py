@@ -252,6 +252,6 @@ _lib("read_carmen-no_return-list", lambda d, log: _imp("crfmap.io.carmen", "read
 _lib("read_bag-int", lambda d: _imp("crfmap.io.bag_reader", "read_bag")(42), ["42"])
 _lib("read_bag-laser_mount-text", lambda d, bag: _imp("crfmap.io.bag_reader", "read_bag")(bag, laser_mount="abc"),
      ["laser_mount"], prep=good_bag)
-_lib("write_bag-not-a-recording", lambda d: _imp("crfmap.io.bag_reader", "write_bag")("rec", Path(d) / "b"), ["b"])
+_lib("write_bag-not-a-recording", lambda d: _imp("crfmap.io.bag_writer", "write_bag")("rec", Path(d) / "b"), ["b"])
 _lib("load_npy-list", lambda d: _imp("crfmap.io.npy_grid", "load_npy")([1, 2]), ["[1, 2]"])
 _lib("read_map_yaml-None", lambda d: _imp("crfmap.io.map_server", "read_map_yaml")(None), ["None"])

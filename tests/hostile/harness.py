@@ -58,7 +58,7 @@ def _hung(signum, frame):
 
 
 ENTRIES = {"crfmap": "crfmap.cli", "reproduce": "crfmap.repro.reproduce", "run": "crfmap.repro.run",
-           "warmup": "crfmap.repro.warmup"}  # a case's command line: its module
+           "warmup": "crfmap.repro.warmup", "library": "library_use"}  # a case's command line: its module
 
 
 @contextlib.contextmanager
@@ -144,7 +144,7 @@ def run_subprocess(case, spec, d):
                 f"from {entry} import main\nwith fault({case.fault!r}, {str(d)!r}): rc = main(sys.argv[1:])\n"
                 "sys.exit(rc)")
     else:
-        code = f"import sys; from {entry} import main; sys.exit(main(sys.argv[1:]))"
+        code = f"import sys; sys.path.insert(0, {str(HERE)!r}); from {entry} import main; sys.exit(main(sys.argv[1:]))"
     env = dict(os.environ, PYTHONWARNINGS="default")
     _apply(env, spec.get("env", {}))
     proc = subprocess.Popen([sys.executable, "-c", code, *spec["argv"]], cwd=d, env=env, stdout=subprocess.DEVNULL,
