@@ -203,3 +203,18 @@ def test_names_are_imported_from_the_module_that_defines_them():
                 if name not in defined and name in imported:
                     offenders.append(f"{where}:{node.lineno}: {name} from {module} (defined in {imported[name]})")
     assert not offenders, "\n".join(offenders)
+
+
+def test_presets_are_the_one_place_that_names_a_preset():
+    """Outside ``crf/model/presets.py`` the library says ``DEFAULT_PRESET`` (or a preset's ``.name``), never the
+    default preset's name as a literal: changing the default is one line."""
+    import re
+
+    from crfmap.crf.model.presets import DEFAULT_PRESET, PRESETS
+
+    literal = re.compile(r"""["']({})["']""".format("|".join(map(re.escape, PRESETS))))
+    offenders = [f"{p.relative_to(LIB)}:{n}: {line.strip()}" for p in sorted(LIB.rglob("*.py"))
+                 if p.relative_to(LIB).as_posix() != "crf/model/presets.py"
+                 for n, line in enumerate(p.read_text().splitlines(), 1)
+                 if any(m.group(1) == DEFAULT_PRESET for m in literal.finditer(line))]
+    assert not offenders, "\n".join(offenders)

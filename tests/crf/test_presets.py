@@ -62,3 +62,28 @@ def test_unknown_preset_is_named():
     with pytest.raises(InputError, match="preset"):
         get_preset("nope")
     assert set(PRESETS) == {"thesis", "certainty"}
+
+
+def test_refine_within_bounds_the_senders_and_keeps_the_preset_region():
+    """``within`` limits the cells that send messages (as infer's region); outside the preset's own region the
+    beliefs stay the observation."""
+    from crfmap.crf.model.presets import DEFAULT_PRESET, custom_preset
+    from crfmap.grid import OccupancyGrid
+
+    rng = np.random.default_rng(1)
+    grid = OccupancyGrid(rng.uniform(0.1, 0.9, (12, 24)))
+    within = np.zeros(grid.shape, bool)
+    within[3:8, 3:8] = True
+    crf = custom_preset([[4.0, 1.0], [1.0, 4.0]])
+    got = crf.refine(grid, within=within, max_iter=5).beliefs.probability
+    want = infer(grid, crf.hidden, crf.link, region=within, max_iter=5, tol=1e-5).beliefs.probability
+    assert np.array_equal(got, want)
+    with pytest.raises(InputError, match="within"):
+        crf.refine(grid, within=within[:3])
+    unseen = grid.probability.copy()
+    unseen[:, 9:] = 0.5  # never observed: beyond the default preset's margin nothing is inferred
+    default = get_preset(DEFAULT_PRESET)
+    assert default.margin is not None and 9 + default.margin < grid.width
+    beliefs = default.refine(unseen, within=np.ones(grid.shape, bool)).beliefs.probability
+    assert np.all(beliefs[:, 9 + default.margin:] == 0.5)
+    assert np.array_equal(beliefs, default.refine(unseen).beliefs.probability)

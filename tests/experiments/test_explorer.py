@@ -6,6 +6,7 @@ from crfmap.experiments import explorer
 from crfmap.errors import InputError
 from crfmap.crf.engine.messages import MESSAGE_FLOOR
 from crfmap.assess.metrics import mse
+from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
 
 
 def test_observe_x_is_the_noisy_image_and_reproducible():
@@ -36,10 +37,24 @@ def test_run_denoises_the_x():
     assert ex.after.accuracy > ex.before.accuracy
 
 
+def test_the_explorer_starts_from_the_default_preset():
+    ex = explorer.run("x", 0.42, iterations=3)
+    crf = get_preset(DEFAULT_PRESET)
+    assert ex.settings["preset"] == DEFAULT_PRESET and ex.settings["hidden"] == crf.hidden.tolist()
+    same = crf.refine(ex.observation.observed, max_iter=3, tol=explorer.TOLERANCE, threads=explorer.THREADS)
+    assert np.array_equal(ex.result.beliefs.probability, same.beliefs.probability)
+    thesis = explorer.run("x", 0.42, iterations=3, preset="thesis")
+    assert not np.allclose(thesis.result.beliefs.probability, ex.result.beliefs.probability)
+    # given tables are run exactly as given, on the grid's P (what the preset "thesis" does with its own)
+    tables = explorer.run("x", 0.42, iterations=3, hidden=get_preset("thesis").hidden)
+    assert tables.settings["preset"] == "custom"
+    assert np.array_equal(tables.result.beliefs.probability, thesis.result.beliefs.probability)
+
+
 def test_iterations_and_schedule_are_passed_on():
     ex = explorer.run("x", 0.42, schedule="thesis", iterations=2)
     assert ex.result.iterations == 2 and ex.result.schedule == "thesis"
-    none = explorer.run("x", 0.42, iterations=0)
+    none = explorer.run("x", 0.42, iterations=0, preset="thesis")
     # no LBP: the beliefs are the observations (clipped to the message floor; hard evidence, P = 0 or 1, exact)
     p = none.observation.observed.probability
     expected = np.where((p == 0) | (p == 1), p, np.clip(p, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR))
@@ -56,7 +71,7 @@ def test_tables_change_the_result():
 
 
 def test_bounded_run_leaves_far_cells_alone():
-    ex = explorer.run("x", 0.42, radius=1.0)
+    ex = explorer.run("x", 0.42, radius=1.0, preset="thesis")
     region = ex.region
     assert region is not None and 0 < region.sum() < region.size
     # cells neither in the bound nor next to it receive no message: their belief is their observation
@@ -161,6 +176,8 @@ def test_panel_redraws_on_each_widget_change():
     from crfmap.experiments.explorer_panel import ExplorerPanel
 
     panel = ExplorerPanel(iterations=2)
+    assert panel.settings()["preset"] == DEFAULT_PRESET and panel.settings()["hidden"] is None
+    assert panel.controls["h_oo"].value == get_preset(DEFAULT_PRESET).hidden[0, 0]
     panel.warm_up()
     assert panel.status.value.startswith("LBP kernels ready")
     panel.redraw()
@@ -169,10 +186,17 @@ def test_panel_redraws_on_each_widget_change():
     assert panel.timings[-1]["change"] == "schedule" and not panel.timings[-1]["compiled"]
     assert "thesis: 2 iterations" in panel.status.value and "drawing" in panel.status.value
     assert panel.image.value != first
-    panel.controls["h_oo"].value = 3.0
+    n = len(panel.timings)
+    panel.controls["preset"].value = "thesis"  # its tables on the sliders, one redraw
+    assert len(panel.timings) == n + 1 and panel.controls["h_oo"].value == 10.0
+    panel.controls["h_oo"].value = 3.0  # a slider moved: exactly the sliders' tables
+    assert panel.controls["preset"].value == "custom tables"
     assert panel.settings()["hidden"] == [[3.0, 1.0], [1.0, 10.0]]
     n = len(panel.timings)
-    panel.reset_tables()  # one redraw, not one per slider
-    assert len(panel.timings) == n + 1 and panel.settings()["hidden"] == [[10.0, 1.0], [1.0, 10.0]]
+    panel.reset_tables()  # back to the default preset: one redraw, not one per slider
+    assert len(panel.timings) == n + 1 and panel.settings()["preset"] == DEFAULT_PRESET
+    assert panel.controls["h_oo"].value == get_preset(DEFAULT_PRESET).hidden[0, 0]
+    panel.controls["preset"].value = "thesis"
+    n = len(panel.timings)
     panel.controls["l_oo"].value = 0.0  # link row C1 is [0, 0]: the error in the status line, not a crash
-    assert panel.status.value.startswith("<span") and "link" in panel.status.value and len(panel.timings) == n + 1
+    assert panel.status.value.startswith("<span") and "link" in panel.status.value and len(panel.timings) == n

@@ -35,12 +35,12 @@ ABLATIONS = ("J = 0", "no margin", "no cap")
 PROBABILITY_FLOOR = 1e-6  # logit(P_raw) of P = 0 or 1 (never from counts, which are finite) stays finite
 
 
-def ablation_presets(base: str = "certainty") -> dict:
-    """{name: Preset}: the ``base`` preset and its ablations (see the module docstring)."""
+def ablation_presets(base: str | None = None) -> dict:
+    """{name: Preset}: the ``base`` preset (None: ``DEFAULT_PRESET``) and its ablations (see the module docstring)."""
     from crfmap.crf.model.presets import coupling_table, get_preset
 
-    p = get_preset(base)
-    return {base: p, "J = 0": replace(p, hidden=coupling_table(0.0)), "no margin": replace(p, margin=None),
+    p = get_preset() if base is None else get_preset(base)
+    return {p.name: p, "J = 0": replace(p, hidden=coupling_table(0.0)), "no margin": replace(p, margin=None),
             "no cap": replace(p, limit=math.inf)}
 
 
@@ -157,7 +157,7 @@ def ablation_predictions(split, calibrators: dict | None = None, unseen_policies
     out, lbp = {}, {}
     observed = split.first_hits + split.first_passes > 0
     for name, preset in ablation_presets().items():
-        if name == "certainty":
+        if name not in ABLATIONS:  # the base preset itself
             continue
         if name == "J = 0":  # no coupling: LBP returns the observation (tested), so skip running it
             out[name] = preset.observation(hits=split.first_hits, passes=split.first_passes)

@@ -23,12 +23,12 @@ from dataclasses import replace
 import numpy as np
 
 from crfmap.assess.scansplit import score
-from crfmap.crf.model.presets import coupling_table, get_preset
+from crfmap.crf.model.presets import DEFAULT_PRESET, coupling_table, get_preset
 
 
 def _near(split, margin):
-    return get_preset("certainty").region(split.first_hits + split.first_passes > 0) if margin is None else \
-        replace(get_preset("certainty"), margin=margin).region(split.first_hits + split.first_passes > 0)
+    preset = get_preset(DEFAULT_PRESET) if margin is None else replace(get_preset(DEFAULT_PRESET), margin=margin)
+    return preset.region(split.first_hits + split.first_passes > 0)
 
 
 def table_refine(split, coupling, link_strength, margin=None, max_iter=1000, tol=1e-5, dtype=np.float64):
@@ -79,7 +79,7 @@ def symmetric_tables(split, couplings, link_strengths, margin=None, group="all",
     return out
 
 
-def scaled_preset(coupling, scale, base="certainty"):
+def scaled_preset(coupling, scale, base=DEFAULT_PRESET):
     """The certainty preset with coupling J and every evidence weight multiplied by ``scale``."""
     p = get_preset(base)
     return replace(p, hidden=coupling_table(coupling), occupied=tuple(scale * v for v in p.occupied),

@@ -59,8 +59,8 @@ START = {"coupling": 0.3, "occupied_first": 1.0, "occupied_further": 0.2, "free_
 def preset_constants(preset) -> dict:
     """The seven searched constants of a :class:`~crfmap.crf.model.presets.Preset`, named as in :data:`GRID`.
 
-    >>> from crfmap.crf.model.presets import get_preset
-    >>> preset_constants(get_preset("certainty"))["margin"]
+    >>> from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+    >>> preset_constants(get_preset(DEFAULT_PRESET))["margin"]
     5
     """
     return {"coupling": round(preset.coupling, 9), "occupied_first": preset.occupied[0],
@@ -68,15 +68,16 @@ def preset_constants(preset) -> dict:
             "limit": preset.limit, "margin": preset.margin}
 
 
-def preset_from(constants: dict, base: str = "certainty"):
-    """The ``base`` preset with the constants of ``constants`` (names of :data:`GRID`)."""
+def preset_from(constants: dict, base: str | None = None):
+    """The ``base`` preset (None: ``DEFAULT_PRESET``) with the constants of ``constants`` (names of :data:`GRID`)."""
     from crfmap.crf.model.presets import coupling_table, get_preset
 
     unknown = set(constants) - set(GRID)
     if unknown:
         raise InputError("constants", f"unknown names {sorted(unknown)}; expected some of {', '.join(GRID)}")
-    c = {**preset_constants(get_preset(base)), **constants}
-    return replace(get_preset(base), hidden=coupling_table(c["coupling"]),
+    p = get_preset() if base is None else get_preset(base)
+    c = {**preset_constants(p), **constants}
+    return replace(p, hidden=coupling_table(c["coupling"]),
                    occupied=(float(c["occupied_first"]), float(c["occupied_further"])),
                    free=(float(c["free_first"]), float(c["free_further"])), limit=float(c["limit"]),
                    margin=int(c["margin"]))

@@ -1,8 +1,9 @@
 """What the interactive explorer (notebook 08) computes and draws, as plain functions.
 
 One call runs one setting end to end: make a scene, observe it (image noise on the X, or a
-simulated robot with range noise elsewhere), run LBP with the chosen tables, schedule, number of
-iterations and bound, and draw truth / before / after / ROC. The notebook wires widgets to
+simulated robot with range noise elsewhere), run LBP with a preset (:mod:`crfmap.crf.model.presets`,
+:data:`~crfmap.crf.model.presets.DEFAULT_PRESET` unless told) or with tables of one's own, a schedule, a
+number of iterations and a bound, and draw truth / before / after / ROC. The notebook wires widgets to
 :func:`explore`; nothing here waits for input, so it runs headless too.
 
 - :func:`observe`: the scene's truth and its observed grid (cached: moving a table slider does
@@ -33,7 +34,7 @@ from crfmap.crf.inference.regions import disc_region
 from crfmap.crf.inference.result import LBPResult
 from crfmap.crf.inference.schedules import SCHEDULES, Checkerboard
 from crfmap.assess.metrics import Report, evaluate
-from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.model.presets import DEFAULT_PRESET, Preset, custom_preset, get_preset
 
 EXPLORER_SCENES = ("x", "occluded-train", "occluded-test", "enclosed-train", "enclosed-test",
                    "hollow-train", "hollow-test", "office")
@@ -138,39 +139,57 @@ def _check_radius(radius):
     return check_positive("radius", radius)
 
 
-def run(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",
-        iterations=None, radius=None, seed=0) -> Exploration:
+def explorer_preset(preset=DEFAULT_PRESET, hidden=None, link=None) -> Preset:
+    """The CRF the explorer runs: ``preset`` (a name or a :class:`~crfmap.crf.model.presets.Preset`), or,
+    when tables are given, exactly those tables on the grid's P (a custom preset; a missing one: the
+    preset's).
+
+    >>> explorer_preset().name == DEFAULT_PRESET, explorer_preset(hidden=[[10, 1], [1, 10]]).name
+    (True, 'custom')
+    """
+    base = preset if isinstance(preset, Preset) else get_preset(preset)
+    if hidden is None and link is None:
+        return base
+    return custom_preset(base.hidden if hidden is None else hidden, base.link if link is None else link)
+
+
+def run(scene="x", noise=DEFAULT_NOISE, hidden=None, link=None, schedule="checkerboard",
+        iterations=None, radius=None, seed=0, preset=DEFAULT_PRESET) -> Exploration:
     """Observe ``scene`` and run LBP on it with these settings.
 
     Parameters
     ----------
     scene : one of :data:`EXPLORER_SCENES`
     noise : image sigma (``"x"``) or range noise bound C [m] (other scenes)
-    hidden, link : 2x2 tables (rows C1 C0, columns N1 N0)
+    hidden, link : 2x2 tables (rows C1 C0, columns N1 N0): LBP with exactly these on the grid's P; None
+        (both): ``preset``'s CRF (see :func:`explorer_preset`)
     schedule : one of :data:`crfmap.crf.inference.schedules.SCHEDULES`
     iterations : int, or None to run to convergence (max message change < 1e-5)
     radius : None, or bounded LBP (sec. 3.4.4): only cells within ``radius`` [m] of the robot's
         start send messages
     seed : int, noise (and office layout) seed
+    preset : a name of :data:`crfmap.crf.model.presets.PRESETS` (default ``DEFAULT_PRESET``) or a Preset
 
     Returns
     -------
     Exploration
     """
     ob = observe(scene, noise, seed)
-    hidden = check_table(hidden, "hidden")
-    link = check_table(link, "link")
+    crf = explorer_preset(preset, hidden, link)
     if schedule not in SCHEDULES:
         raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)}, got {schedule!r}")
     max_iter = _check_iterations(iterations)
     radius = _check_radius(radius)
-    region = None if radius is None else disc_region(ob.observed, ob.scene.start[:2], radius)
-    result = infer(ob.observed, hidden, link, schedule=schedule, max_iter=max_iter, tol=TOLERANCE, region=region,
-                   threads=THREADS)
+    bound = None if radius is None else disc_region(ob.observed, ob.scene.start[:2], radius)
+    result = crf.refine(ob.observed, within=bound, schedule=schedule, max_iter=max_iter, tol=TOLERANCE,
+                        threads=THREADS)
+    region = crf.region(ob.observed.probability != 0.5)
+    region = bound if region is None else region if bound is None else region & bound
     _WARMED.add((schedule, region is not None, result.kernel))
     truth = ob.scene.truth
-    settings = {"scene": scene, "noise": ob.noise, "noise_kind": ob.noise_kind, "hidden": hidden.tolist(),
-                "link": link.tolist(), "schedule": schedule, "iterations": iterations, "radius": radius, "seed": seed}
+    settings = {"scene": scene, "noise": ob.noise, "noise_kind": ob.noise_kind, "preset": crf.name,
+                "hidden": crf.hidden.tolist(), "link": crf.link.tolist(), "schedule": schedule,
+                "iterations": iterations, "radius": radius, "seed": seed}
     return Exploration(ob, result, evaluate(ob.observed, truth), evaluate(result.beliefs, truth), region, settings)
 
 
@@ -242,15 +261,15 @@ def draw(ex: Exploration):
     return ExplorerView(live=False).update(ex).figure
 
 
-def explore(scene="x", noise=DEFAULT_NOISE, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, schedule="checkerboard",
-            iterations=None, radius=None, seed=0):
+def explore(scene="x", noise=DEFAULT_NOISE, hidden=None, link=None, schedule="checkerboard",
+            iterations=None, radius=None, seed=0, preset=DEFAULT_PRESET):
     """:func:`run` then :func:`draw`: the explorer's figure for one setting.
 
     >>> fig = explore("x", iterations=2, schedule="thesis")
     >>> len(fig.axes)  # truth, before, after, ROC
     4
     """
-    return draw(run(scene, noise, hidden, link, schedule, iterations, radius, seed))
+    return draw(run(scene, noise, hidden, link, schedule, iterations, radius, seed, preset))
 
 
 def to_png(fig, dpi: int = 90) -> bytes:

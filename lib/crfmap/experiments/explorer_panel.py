@@ -23,13 +23,14 @@ import time
 import numpy as np
 
 from crfmap.crf.inference.schedules import SCHEDULES
-from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.model.presets import DEFAULT_PRESET, PRESETS, get_preset
 from crfmap.experiments import explorer
 from crfmap.experiments.explorer_view import ExplorerView
 
 ITERATION_CHOICES = (1, 2, 3, 5, 10, 20, 50, 100)
 CONVERGE = "to convergence"  # the iterations control's None (a Dropdown's None means "nothing selected")
 ENTRIES = ("oo", "oe", "eo", "ee")  # rows C1 C0 (receiver), columns N1 N0 (neighbour / observation)
+CUSTOM = "custom tables"  # the preset control's value once a table slider moved: exactly the sliders' tables
 
 
 class ExplorerPanel:
@@ -37,26 +38,32 @@ class ExplorerPanel:
     :meth:`warm_up` and :meth:`redraw` once).
 
     Parameters are the initial setting (as :func:`crfmap.experiments.explorer.run`), with the
-    X's image noise and the simulated scenes' range noise apart (each scene uses its own).
+    X's image noise and the simulated scenes' range noise apart (each scene uses its own). The panel starts
+    from ``preset`` (:data:`~crfmap.crf.model.presets.DEFAULT_PRESET`); moving a table slider runs exactly
+    the sliders' tables (the preset control then reads "custom tables"), choosing a preset sets the sliders
+    to its tables.
     ``widget`` is the panel to display; ``controls`` maps names to widgets; ``timings`` holds one
     dict per redraw (``change``, ``seconds`` from the change to the new PNG, ``lbp_seconds``,
     ``compiled``: the run's kernels were not warm).
     """
 
     def __init__(self, scene="x", image_noise=explorer.DEFAULT_NOISE, range_noise=0.0, schedule="checkerboard",
-                 iterations=None, radius=None, seed=0):
+                 iterations=None, radius=None, seed=0, preset=DEFAULT_PRESET):
         import ipywidgets as w
+
+        start = get_preset(preset)
 
         slider = {"continuous_update": False, "style": {"description_width": "initial"}}
         c = {"scene": w.Dropdown(options=list(explorer.EXPLORER_SCENES), value=scene, description="scene"),
              "image_noise": w.FloatSlider(value=image_noise, min=0.0, max=1.0, step=0.01,
                                           description="X: image sigma", **slider),
              "range_noise": w.FloatSlider(value=range_noise, min=0.0, max=0.5, step=0.01,
-                                          description="others: range C [m]", **slider)}
-        for n, v in zip(ENTRIES, DEFAULT_HIDDEN.ravel()):
+                                          description="others: range C [m]", **slider),
+             "preset": w.Dropdown(options=list(PRESETS) + [CUSTOM], value=start.name, description="preset")}
+        for n, v in zip(ENTRIES, start.hidden.ravel()):
             c[f"h_{n}"] = w.FloatSlider(value=float(v), min=0.0, max=20.0, step=0.1, description=f"hidden {n}",
                                         **slider)
-        for n, v in zip(ENTRIES, DEFAULT_LINK.ravel()):
+        for n, v in zip(ENTRIES, start.link.ravel()):
             c[f"l_{n}"] = w.FloatSlider(value=float(v), min=0.0, max=1.0, step=0.01, description=f"link {n}",
                                         **slider)
         c["schedule"] = w.Dropdown(options=list(SCHEDULES), value=schedule, description="schedule")
@@ -69,12 +76,12 @@ class ExplorerPanel:
         self.controls = c
         self.status = w.HTML()
         self.image = w.Image(format="png")
-        reset = w.Button(description="thesis defaults")
+        reset = w.Button(description=f"{DEFAULT_PRESET} preset")
         reset.on_click(lambda _: self.reset_tables())
         self.widget = w.VBox([
             w.HBox([c["scene"], c["image_noise"], c["range_noise"], c["seed"]]),
             w.HBox([w.VBox([c[f"h_{n}"] for n in ENTRIES]), w.VBox([c[f"l_{n}"] for n in ENTRIES]),
-                    w.VBox([c["schedule"], c["iterations"], c["radius"], reset])]),
+                    w.VBox([c["preset"], c["schedule"], c["iterations"], c["radius"], reset])]),
             self.status,
             self.image,
         ])
@@ -89,22 +96,28 @@ class ExplorerPanel:
     def settings(self) -> dict:
         """The controls' values as :func:`crfmap.experiments.explorer.run`'s arguments."""
         v = {name: control.value for name, control in self.controls.items()}
+        custom = v["preset"] == CUSTOM
         return dict(scene=v["scene"], noise=v["image_noise"] if v["scene"] == "x" else v["range_noise"],
-                    hidden=[[v["h_oo"], v["h_oe"]], [v["h_eo"], v["h_ee"]]],
-                    link=[[v["l_oo"], v["l_oe"]], [v["l_eo"], v["l_ee"]]], schedule=v["schedule"],
-                    iterations=None if v["iterations"] == CONVERGE else int(v["iterations"]),
-                    radius=v["radius"] if v["radius"] > 0 else None, seed=int(v["seed"]))
+                    hidden=[[v["h_oo"], v["h_oe"]], [v["h_eo"], v["h_ee"]]] if custom else None,
+                    link=[[v["l_oo"], v["l_oe"]], [v["l_eo"], v["l_ee"]]] if custom else None,
+                    schedule=v["schedule"], iterations=None if v["iterations"] == CONVERGE else int(v["iterations"]),
+                    radius=v["radius"] if v["radius"] > 0 else None, seed=int(v["seed"]),
+                    preset=DEFAULT_PRESET if custom else v["preset"])
 
-    def reset_tables(self):
-        """The thesis's default tables, redrawn once (not once per slider)."""
+    def reset_tables(self, preset=DEFAULT_PRESET):
+        """Back to ``preset`` (its tables on the sliders), redrawn once (not once per slider)."""
         self._batch = True
         try:
-            for name, value in zip([f"h_{n}" for n in ENTRIES] + [f"l_{n}" for n in ENTRIES],
-                                   np.r_[DEFAULT_HIDDEN.ravel(), DEFAULT_LINK.ravel()]):
-                self.controls[name].value = float(value)
+            self.controls["preset"].value = preset
+            self._show_tables(get_preset(preset))
         finally:
             self._batch = False
-        self._changed("thesis defaults")
+        self._changed(f"{preset} preset")
+
+    def _show_tables(self, crf):
+        for name, value in zip([f"h_{n}" for n in ENTRIES] + [f"l_{n}" for n in ENTRIES],
+                               np.r_[crf.hidden.ravel(), crf.link.ravel()]):
+            self.controls[name].value = float(value)
 
     # --- compiling and redrawing ------------------------------------------------------------------
     def warm_up(self) -> dict:
@@ -119,8 +132,17 @@ class ExplorerPanel:
         return seconds
 
     def _changed(self, name):
-        if not self._batch:
-            self.redraw(name)
+        if self._batch:
+            return
+        self._batch = True  # the preset control and the sliders follow each other without redrawing
+        try:
+            if name == "preset" and self.controls["preset"].value != CUSTOM:
+                self._show_tables(get_preset(self.controls["preset"].value))
+            elif name[:2] in ("h_", "l_"):
+                self.controls["preset"].value = CUSTOM
+        finally:
+            self._batch = False
+        self.redraw(name)
 
     def redraw(self, change="initial"):
         """Run the current setting and update the figure in place; returns the Exploration (or None)."""
@@ -138,7 +160,7 @@ class ExplorerPanel:
             self.status.value = f"<span style='color:#b00'>{err}</span>"
             return None
         self._seen.add(observed)
-        cold = (s["schedule"], s["radius"] is not None, ex.result.kernel) not in warm
+        cold = (s["schedule"], ex.region is not None, ex.result.kernel) not in warm
         t1 = time.perf_counter()
         self.image.value = self.view.update(ex).png()
         t2 = time.perf_counter()

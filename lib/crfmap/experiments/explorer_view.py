@@ -48,7 +48,8 @@ def titles(ex) -> dict:
         "before": f"before LBP ({ob.noise_kind} {ob.noise:g})\nMSE {ex.before.mse:.4f}",
         "after": f"after LBP: {ex.result.iterations} it., "
         f"{'converged' if ex.result.converged else 'not converged'}\nMSE {ex.after.mse:.4f}",
-        "suptitle": f"hidden {_fmt(s['hidden'])}, link {_fmt(s['link'])}, {s['schedule']}, {its}, {bound}, "
+        "suptitle": ("" if s.get("preset", "custom") == "custom" else f"{s['preset']} preset: ")
+        + f"hidden {_fmt(s['hidden'])}, link {_fmt(s['link'])}, {s['schedule']}, {its}, {bound}, "
         f"seed {s['seed']}",
     }
 
@@ -140,7 +141,7 @@ class ExplorerView:
         a = self._artists
         a["before"].set_data(ex.observation.observed.probability)
         a["after"].set_data(ex.result.beliefs.probability)
-        bounded = ex.region is not None
+        bounded = ex.settings["radius"] is not None  # the bound around the robot (not a preset's margin)
         a["bound"].set_visible(bounded)
         a["start"].set_visible(bounded)
         if bounded:

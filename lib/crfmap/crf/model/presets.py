@@ -135,12 +135,13 @@ class Preset:
             return None
         return near_known(np.where(np.asarray(observed, bool), 1.0, 0.5), int(self.margin))
 
-    def refine(self, grid=None, hits=None, passes=None, **options):
+    def refine(self, grid=None, hits=None, passes=None, within=None, **options):
         """Run LBP with this preset: on counts (``hits``, ``passes``) or on a grid's P.
 
         Returns the :class:`~crfmap.crf.inference.result.LBPResult`; outside :meth:`region` the beliefs are
-        the observation itself (0.5 where nothing was observed). ``options`` go to
-        :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ...).
+        the observation itself (0.5 where nothing was observed). ``within`` (a boolean mask such as a bound
+        around the robot) further limits the cells that send messages, as ``infer``'s ``region``. ``options``
+        go to :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...).
 
         >>> r = get_preset("certainty").refine(np.array([[0.5, 0.9, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]]))
         >>> r.converged, float(r.beliefs.probability[0, -1])
@@ -158,11 +159,16 @@ class Preset:
             unary = self.observation(hits=hits, passes=passes)
             observed = (np.asarray(hits) + np.asarray(passes)) > 0
             g = OccupancyGrid(unary)
-        region = self.region(observed)
+        own = region = self.region(observed)
+        if within is not None:  # only these cells send messages, as infer's region
+            within = np.asarray(within, dtype=bool)
+            if within.shape != g.shape:
+                raise InputError("within", f"shape {within.shape} does not match the grid's {g.shape}")
+            region = within if own is None else own & within
         options.setdefault("tol", 1e-5)
         result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
-        if region is not None:  # outside the region nothing was inferred: keep the observation
-            result.beliefs = result.beliefs.with_probability(np.where(region, result.beliefs.probability, unary))
+        if own is not None:  # outside the preset's region nothing was inferred: keep the observation
+            result.beliefs = result.beliefs.with_probability(np.where(own, result.beliefs.probability, unary))
         return result
 
 
