@@ -29,10 +29,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from crfmap.assess.calibration import LOGIT_FLOOR
 from crfmap.errors import InputError
 
 ABLATIONS = ("J = 0", "no margin", "no cap")
-PROBABILITY_FLOOR = 1e-6  # logit(P_raw) of P = 0 or 1 (never from counts, which are finite) stays finite
 
 
 def ablation_presets(base: str | None = None) -> dict:
@@ -100,7 +100,7 @@ class IsotonicEvidence:
 
 
 def _logit(p):
-    q = np.clip(np.asarray(p, dtype=np.float64), PROBABILITY_FLOOR, 1 - PROBABILITY_FLOOR)
+    q = np.clip(np.asarray(p, dtype=np.float64), LOGIT_FLOOR, 1 - LOGIT_FLOOR)  # P_raw of 0 or 1: a finite logit
     return np.log(q / (1 - q))
 
 

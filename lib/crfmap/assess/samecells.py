@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from crfmap.assess.scansplit import DEFAULT_BLOCK
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
 
@@ -114,7 +115,7 @@ def fold_scores(predictions: dict, labels, held_out, folds, reference: str, n_bo
     return out
 
 
-def block_scores(predictions: dict, labels, mask, reference: str, block: int = 16, n_boot: int = 1000,
+def block_scores(predictions: dict, labels, mask, reference: str, block: int = DEFAULT_BLOCK, n_boot: int = 1000,
                  seed: int = 0, level: float = 0.95) -> dict:
     """Every prediction on the cells of ``mask`` all of them decide, with spatial-block paired intervals.
 
