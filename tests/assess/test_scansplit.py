@@ -5,28 +5,10 @@ import pytest
 from crfmap.assess.scansplit import ScanSplit, scan_split, score, split_scans
 from crfmap.errors import InputError
 from crfmap.mapping.builder import build_grid, count_hits
-from crfmap.recording import ScanSet
 
 
-def _room(n_scans=6, seed=0):
-    """A laser at the centre of a 2 m square room, turning: every beam hits a wall."""
-    rng = np.random.default_rng(seed)
-    n = 90
-    angles = np.linspace(-np.pi, np.pi, n, endpoint=False)
-    poses = np.column_stack([1 + 0.05 * rng.standard_normal(n_scans), 1 + 0.05 * rng.standard_normal(n_scans),
-                             rng.uniform(-0.1, 0.1, n_scans)])
-    ranges = np.empty((n_scans, n), np.float32)
-    for i, (x, y, yaw) in enumerate(poses):
-        a = angles + yaw
-        with np.errstate(divide="ignore"):
-            tx = np.where(np.cos(a) > 0, (1.95 - x) / np.cos(a), (0.05 - x) / np.cos(a))
-            ty = np.where(np.sin(a) > 0, (1.95 - y) / np.sin(a), (0.05 - y) / np.sin(a))
-        ranges[i] = np.minimum(np.abs(tx), np.abs(ty))
-    return ScanSet(ranges, -np.pi, 2 * np.pi / n, 0.01, 5.0, poses, np.arange(n_scans, dtype=float))
-
-
-def test_halves_are_the_even_and_odd_scans_on_one_grid():
-    scans = _room()
+def test_halves_are_the_even_and_odd_scans_on_one_grid(room):
+    scans = room
     sp = scan_split(scans, 0.1, bounds=(0, 0, 2, 2))
     h1, e1 = count_hits(split_scans(scans, 0), 0.1, bounds=(0, 0, 2, 2))
     h2, e2 = count_hits(split_scans(scans, 1), 0.1, bounds=(0, 0, 2, 2))

@@ -5,25 +5,10 @@ import pytest
 from crfmap.assess import splits
 from crfmap.assess.scansplit import scan_split, score
 from crfmap.errors import InputError
-from crfmap.recording import ScanSet
 
 
-def _walk(n_scans=12):
-    """A laser walking along a 3 m x 1 m corridor, scanning its walls."""
-    n = 60
-    angles = np.linspace(-np.pi, np.pi, n, endpoint=False)
-    poses = np.column_stack([np.linspace(0.3, 2.7, n_scans), np.full(n_scans, 0.5), np.zeros(n_scans)])
-    ranges = np.empty((n_scans, n), np.float32)
-    for i, (x, y, _) in enumerate(poses):
-        with np.errstate(divide="ignore"):
-            tx = np.where(np.cos(angles) > 0, (2.95 - x) / np.cos(angles), (0.05 - x) / np.cos(angles))
-            ty = np.where(np.sin(angles) > 0, (0.95 - y) / np.sin(angles), (0.05 - y) / np.sin(angles))
-        ranges[i] = np.minimum(np.abs(tx), np.abs(ty))
-    return ScanSet(ranges, -np.pi, 2 * np.pi / n, 0.01, 5.0, poses, np.arange(n_scans, dtype=float))
-
-
-def test_split_by_alternate_scans_is_scan_split():
-    scans = _walk()
+def test_split_by_alternate_scans_is_scan_split(corridor):
+    scans = corridor
     a = splits.split_by(scans, np.arange(len(scans)) % 2 == 0, 0.1)
     b = scan_split(scans, 0.1)
     for name in ("first_hits", "first_passes", "second_hits", "second_passes"):
@@ -38,8 +23,8 @@ def test_masks():
     assert splits.spatial_tiles(poses, 2.0).tolist() == [True, False, True, False]
 
 
-def test_harder_splits_use_every_scan_once_and_score():
-    scans = _walk()
+def test_harder_splits_use_every_scan_once_and_score(corridor):
+    scans = corridor
     out = splits.harder_splits(scans, 0.1, block=3, tile=1.0)
     whole = scan_split(scans, 0.1)
     for sp in out.values():
@@ -52,8 +37,8 @@ def test_harder_splits_use_every_scan_once_and_score():
     assert len(temporal.first_scans) == 6 and temporal.first_scans.laser_poses[-1, 0] < 1.5
 
 
-def test_block_sensitivity_gives_one_interval_per_block_and_group():
-    sp = scan_split(_walk(), 0.1)
+def test_block_sensitivity_gives_one_interval_per_block_and_group(corridor):
+    sp = scan_split(corridor, 0.1)
     out = splits.block_sensitivity(sp, {"raw": sp.raw_probability(), "half": np.full(sp.shape, 0.5)}, (1, 4),
                                    n_boot=20)
     assert sorted(out) == [1, 4] and set(out[1]["half"]) == {"all", "seen", "unseen"}
@@ -66,6 +51,6 @@ def test_block_sensitivity_gives_one_interval_per_block_and_group():
                                   lambda s: splits.scan_blocks(len(s), 0),
                                   lambda s: splits.spatial_tiles(s.laser_poses, -1.0),
                                   lambda s: splits.temporal_halves(1)])
-def test_bad_input(call):
+def test_bad_input(call, corridor):
     with pytest.raises(InputError):
-        call(_walk())
+        call(corridor)
