@@ -63,6 +63,20 @@ def check_int(name, value, low=None, high=None) -> int:
     return value
 
 
+def check_settings(name, value, classes: dict, wanted: str):
+    """``value`` if it is an instance of one of ``classes`` ({name: settings class}), or the class called ``value``
+    with its defaults; else InputError ``name: {wanted}, got {value!r}`` (a schedule, a drive, ...).
+
+    >>> check_settings("mode", "a", {"a": complex}, "must be a")
+    0j
+    """
+    if isinstance(value, tuple(classes.values())):
+        return value
+    if isinstance(value, str) and value in classes:
+        return classes[value]()
+    raise InputError(name, f"{wanted}, got {value!r}")
+
+
 def check_pair(observed, truth, grids_only=False) -> tuple:
     """The probability arrays of an observed grid and its truth, checked to have one shape.
 

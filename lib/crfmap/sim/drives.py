@@ -18,8 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from crfmap.checks import check_int, check_number, check_positive
-from crfmap.errors import InputError
+from crfmap.checks import check_int, check_number, check_positive, check_settings
 from crfmap.sim.motion import explore_reachable, follow_waypoints, look_around
 
 
@@ -94,9 +93,5 @@ DRIVE_SETTINGS = {"stride": "Explore", "robot_radius": "Explore or Waypoints", "
 
 def drive_for(drive):
     """The drive object for ``drive``: a drive itself, or a mode name meaning that drive with its defaults."""
-    if isinstance(drive, tuple(DRIVES.values())):
-        return drive
-    if isinstance(drive, str) and drive in DRIVES:
-        return DRIVES[drive]()
-    raise InputError("drive", f"expected one of {', '.join(map(repr, DRIVES))} or an Explore, Look or Waypoints, "
-                              f"got {drive!r}")
+    return check_settings("drive", drive, DRIVES,
+                          f"expected one of {', '.join(map(repr, DRIVES))} or an Explore, Look or Waypoints")

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from crfmap.checks import check_settings
 from crfmap.crf.engine.messages import beliefs_from_messages, floored, initial_messages
 from crfmap.crf.inference import _plain_kernels as K
 from crfmap.crf.model.evidence import clamp_messages
@@ -88,11 +89,10 @@ class Checkerboard:
 
 
 @dataclass(frozen=True)
-class Flooding:
-    """Every cell sends from the previous iteration's messages; ``damping`` in [0, 1)."""
+class _Damped:
+    """A schedule of the plain kernels whose one option is ``damping`` in [0, 1)."""
 
     damping: float = 0.0
-    name = "flooding"
     uses_engine = False
 
     def __post_init__(self):
@@ -100,15 +100,17 @@ class Flooding:
 
 
 @dataclass(frozen=True)
-class Sweep:
+class Flooding(_Damped):
+    """Every cell sends from the previous iteration's messages; ``damping`` in [0, 1)."""
+
+    name = "flooding"
+
+
+@dataclass(frozen=True)
+class Sweep(_Damped):
     """Four directional sweeps per iteration; ``damping`` in [0, 1)."""
 
-    damping: float = 0.0
     name = "sweep"
-    uses_engine = False
-
-    def __post_init__(self):
-        _check_damping(self.damping)
 
 
 @dataclass(frozen=True)
@@ -132,12 +134,8 @@ SCHEDULES = tuple(SETTINGS)
 
 def schedule_settings(schedule):
     """The settings object of ``schedule``: a name (its defaults) or a settings object, else InputError."""
-    if isinstance(schedule, tuple(SETTINGS.values())):
-        return schedule
-    if isinstance(schedule, str) and schedule in SETTINGS:
-        return SETTINGS[schedule]()
-    raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)} or their settings "
-                     f"(Checkerboard(...), ...), got {schedule!r}")
+    return check_settings("schedule", schedule, SETTINGS,
+                          f"must be one of {', '.join(SCHEDULES)} or their settings (Checkerboard(...), ...)")
 
 
 def run_schedule(settings, probability, tables, link, max_iter, tol, senders, messages, dtype, floor, clamped):
