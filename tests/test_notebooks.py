@@ -36,6 +36,7 @@ def test_the_cell_length_check_counts_every_line(tmp_path):
     assert long_code_cells(path) == [(1, 31)]
 
 
+@pytest.mark.slow  # 15 s to minutes each; `make test` runs them in parallel (pytest -n)
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_executes(notebook, tmp_path, monkeypatch):
     import papermill as pm
