@@ -42,9 +42,10 @@ test: warm
 	$(BIN)/python -m pytest -q -n $(CORES) tests/test_notebooks.py || status=$$?; \
 	exit $$status
 
-# the kernel tests with numba's JIT off, so coverage sees the kernels' lines as Python (slow; not in CI)
+# the kernel tests with numba's JIT off, so coverage sees the kernels' lines as Python (about 10 min; not in CI;
+# tests/crf/conftest.py skips, naming them, those over 20 s of CPU as plain Python)
 kernel-coverage: $(STAMP)
-	NUMBA_DISABLE_JIT=1 $(BIN)/python -m pytest -q -p no:cacheprovider tests/crf --cov=lib/crfmap/crf --cov-report=term
+	NUMBA_DISABLE_JIT=1 $(BIN)/python -m pytest -q -rs -p no:cacheprovider tests/crf --cov=lib/crfmap/crf --cov-report=term
 
 # the clock starts before the venv and the warm-up, so the record is what `make reproduce` costs
 reproduce:
