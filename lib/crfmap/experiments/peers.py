@@ -15,7 +15,6 @@ from crfmap.crf.model.presets import DEFAULT_PRESET
 
 MORE_RECORDINGS = {"csail": "carmen/csail-corrected.log.gz", "fr101": "carmen/freiburg-101-corrected.log.gz"}
 TABLE_ROWS = ("raw", "logodds", "thesis", "graphcut", DEFAULT_PRESET, "octomap", "hilbert")
-CALIBRATED = ("raw", DEFAULT_PRESET, "octomap", "hilbert")
 CACHE_VERSION = 1  # bump when a peer's algorithm changes
 
 
@@ -57,7 +56,8 @@ def cached_peer_rows(label, split, methods=("octomap", "hilbert"), progress=Fals
 
 
 def score_all(split, predictions, n_boot, block, seed, temperature=None):
-    """Scores with paired differences to the default preset, calibration, and (given T) the tempered preset."""
+    """Scores with paired differences to the default preset, calibration of every scored row, and (given T) the
+    tempered preset ``<preset>-T``."""
     from crfmap.assess.calibration import apply_temperature, split_calibration
     from crfmap.assess.scansplit import score
 
@@ -65,7 +65,7 @@ def score_all(split, predictions, n_boot, block, seed, temperature=None):
     if temperature is not None:
         preds[f"{DEFAULT_PRESET}-T"] = apply_temperature(preds[DEFAULT_PRESET], temperature)
     scores = score(split, preds, n_boot=n_boot, block=block, seed=seed, reference=DEFAULT_PRESET)
-    calib = split_calibration(split, {n: p for n, p in preds.items() if n in CALIBRATED or n.endswith("-T")})
+    calib = split_calibration(split, preds)  # every row: the baselines as well as the preset and the peers
     return {"scores": scores, "calibration": calib}
 
 
