@@ -37,3 +37,44 @@ def test_score_all_calibrates_every_row_of_the_table():
     ece_column = table["header"].index("ECE")
     eces = {row[0]: row[ece_column] for row in table["rows"]}
     assert set(eces) == rows and all(np.isfinite(v) and 0 <= v <= 1 for v in eces.values()), eces
+
+
+def _room_split(n_scans=16):
+    """The scan split of a laser turning in a 3 m x 2 m room (CARMEN-free: a ScanSet made here)."""
+    from crfmap.assess.scansplit import scan_split
+    from crfmap.recording import ScanSet
+
+    angles = np.linspace(-np.pi / 2, np.pi / 2, 181)
+    poses = np.array([[1.5, 1.0, 2 * np.pi * i / n_scans] for i in range(n_scans)])
+    ranges = []
+    for x, y, yaw in poses:
+        a = angles + yaw
+        with np.errstate(divide="ignore"):
+            tx = np.where(np.cos(a) > 0, (2.95 - x) / np.cos(a), (0.05 - x) / np.cos(a))
+            ty = np.where(np.sin(a) > 0, (1.95 - y) / np.sin(a), (0.05 - y) / np.sin(a))
+        ranges.append(np.minimum(np.abs(tx), np.abs(ty)))
+    scans = ScanSet(np.array(ranges, np.float32), -np.pi / 2, np.pi / 180, 0.05, 8.0, poses, np.arange(n_scans, dtype=float))
+    return scan_split(scans, 0.1)
+
+
+def test_quick_peer_settings_are_lighter_and_cached_apart_from_the_full_ones(tmp_path, monkeypatch):
+    from crfmap import paths
+    from crfmap.assess.peers import peer_rows
+    from crfmap.mapping.hilbert import hilbert_grid
+
+    monkeypatch.setattr(paths, "OUT", tmp_path)
+    sp = _room_split()
+    full, _ = peer_report.cached_peer_rows("room", sp)
+    expected, _ = peer_rows(sp, ["octomap", "hilbert"])
+    for name in ("octomap", "hilbert"):  # the full settings are the peers as they were
+        np.testing.assert_array_equal(full[name], expected[name])
+    quick, _ = peer_report.cached_peer_rows("room", sp, quick=True)
+    np.testing.assert_array_equal(quick["octomap"], full["octomap"])  # OctoMap is cheap: every scan in both
+    q = peer_report.QUICK
+    light = hilbert_grid(sp.first_scans.every(q.hilbert_scan_step), sp.resolution, sp.bounds, **q.hilbert_options())
+    assert light.meta["scans"] == len(sp.first_scans) // q.hilbert_scan_step < len(sp.first_scans)
+    np.testing.assert_array_equal(quick["hilbert"], light.probability)
+    assert not np.array_equal(quick["hilbert"], full["hilbert"])
+    assert len(list((tmp_path / "cache" / "peers").glob("room-hilbert-*.npz"))) == 2  # one file per setting
+    again, _ = peer_report.cached_peer_rows("room", sp, quick=True)  # read back from the cache
+    np.testing.assert_array_equal(again["hilbert"], quick["hilbert"])
