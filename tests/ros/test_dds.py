@@ -117,6 +117,36 @@ def test_refine_node_over_dds(tmp_path, monkeypatch):
     assert node.log().count("[data length") == 1
 
 
+def test_refine_node_outlives_a_publisher_that_leaves(tmp_path, monkeypatch):
+    """A publisher leaving hands the node's reader an invalid sample (its instance's state): skipped, not a crash."""
+    import gc
+
+    from cyclonedds.domain import DomainParticipant
+
+    from crfmap.grid import OccupancyGrid
+
+    env = loopback_dds(tmp_path, monkeypatch)
+    grid = OccupancyGrid(np.where(np.arange(48).reshape(6, 8) % 5 == 0, 1.0, 0.5), resolution=0.1)
+    node = NodeProcess(["refine", "--period", "0"], env)
+    try:
+        node.wait_for("publishing /map_refined")
+        for k in range(2):  # the second publisher starts after the first has gone
+            participant = DomainParticipant(int(env["ROS_DOMAIN_ID"]))
+            writer, reader = _writer_reader(participant)
+            wait_matched(writer)
+            _send(writer, grid_out(grid, 1_700_000_000_000_000_000 + k, "map"))
+            stamps = set()
+            while 1_700_000_000_000_000_000 + k not in stamps:
+                stamps |= {grid_message(decode_grid(p)).stamp_ns for p in wait_raw(reader, 1)}
+            writer = reader = participant = None
+            gc.collect()  # the participant and its writer go: the node's reader sees the instance unregistered
+        node.wait_for("refined /map .*stamp 1700000000.000 s")
+    finally:
+        status = node.stop(signal.SIGTERM)
+    assert status == 0 and "Traceback" not in node.log(), node.log()
+    assert "stopped: 2 maps received, 2 refined and published" in node.log(), node.log()
+
+
 OLIN_BAG = "rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2"
 
 
