@@ -1,11 +1,6 @@
-"""Tests mirror the package (tests/crf/ for crfmap.crf, ...); the naive references stay here, importable from all."""
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-
-import pytest  # noqa: E402
+"""Tests mirror the package (tests/crf/ for crfmap.crf, ...); the naive references stay here, importable from all
+(pyproject.toml's ``[tool.pytest.ini_options] pythonpath`` puts tests/ on the path)."""
+import pytest
 
 # a two-scan CARMEN log that the command tests build maps from (tests/mapping, tests/test_cli_ros.py)
 CARMEN_LINES = [

@@ -169,3 +169,11 @@ def test_the_reproductions_lighter_settings_reach_the_records():
     fast = [r for r in records if r["method"] == "crfmap-fast"]
     assert fast and all(r["iterations_timed"] == 32 for r in fast)  # work / cells, a multiple of the block
     assert [r["cache"] for r in records if r["method"] == "jit-compile"] == ["warm"]  # no empty-cache child
+
+
+def test_only_runs_the_groups_asked_for_and_names_a_wrong_one(capsys):
+    records = list(bench.run(quick=True, progress=False, only=["machine"], threads=(1,)))
+    assert {r["method"] for r in records} == {"agreement", "memory-bandwidth"}
+    assert main(["bench", "--only", "node", "nope"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--only" in err and "nope" in err

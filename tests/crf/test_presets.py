@@ -87,3 +87,32 @@ def test_refine_within_bounds_the_senders_and_keeps_the_preset_region():
     beliefs = default.refine(unseen, within=np.ones(grid.shape, bool)).beliefs.probability
     assert np.all(beliefs[:, 9 + default.margin:] == 0.5)
     assert np.array_equal(beliefs, default.refine(unseen).beliefs.probability)
+
+
+def test_temperature_tempers_the_whole_refined_map_and_one_changes_nothing():
+    from dataclasses import replace
+
+    from crfmap.crf.model.presets import temper
+
+    c = get_preset("certainty")
+    assert c.temperature == 1.0 and get_preset("thesis").temperature == 1.0
+    rng = np.random.default_rng(3)
+    hits, passes = rng.integers(0, 3, (20, 20)), rng.integers(0, 3, (20, 20))
+    hits[:, 12:] = passes[:, 12:] = 0  # a never-seen strip, partly beyond the margin
+    base = c.refine(hits=hits, passes=passes).beliefs.probability
+    assert np.array_equal(replace(c, temperature=1.0).refine(hits=hits, passes=passes).beliefs.probability, base)
+    for t in (0.5, 2.0):
+        got = replace(c, temperature=t).refine(hits=hits, passes=passes).beliefs.probability
+        q = np.clip(base, 1e-6, 1 - 1e-6)
+        np.testing.assert_allclose(np.log(got / (1 - got)), np.log(q / (1 - q)) / t, atol=1e-9)
+        assert np.all(got[:, 19] == 0.5)  # unknown stays unknown
+    np.testing.assert_allclose(temper(base, 2.0), replace(c, temperature=2.0).refine(hits=hits, passes=passes)
+                               .beliefs.probability)
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), "warm", True])
+def test_bad_temperature_is_named(bad):
+    from dataclasses import replace
+
+    with pytest.raises(InputError, match="temperature"):
+        replace(get_preset("certainty"), temperature=bad)

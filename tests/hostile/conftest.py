@@ -1,7 +1,4 @@
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+"""The hostile catalogue's terminal summary (harness, cases and faults are on pytest's pythonpath)."""
 
 
 def pytest_terminal_summary(terminalreporter):

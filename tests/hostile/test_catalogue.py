@@ -13,7 +13,9 @@ from harness import all_cases, run_case
 CASES = all_cases()
 
 
-@pytest.mark.parametrize("case", CASES, ids=[f"{c.cls}/{c.name}" for c in CASES])
+# a case run in a child process (a fresh interpreter importing crfmap) is among the slowest: marked, for information
+@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.slow) if c.subprocess else c for c in CASES],
+                         ids=[f"{c.cls}/{c.name}" for c in CASES])
 def test_refused_cleanly(case):
     found, err, _ = run_case(case, inprocess=True)
     assert not found, f"{found}\n--- stderr ---\n{err[-1500:]}"

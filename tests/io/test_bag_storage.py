@@ -1,7 +1,5 @@
 """ROS 2 bags as rosbag2 writes them: MCAP and sqlite3, NAME_0 data files, metadata Humble parses, latched /tf_static."""
 import sqlite3
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +10,7 @@ from crfmap.errors import InputError
 from crfmap.io.bag_reader import read_bag
 from crfmap.io.bag_writer import write_bag
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_bag_reader import make_recording  # noqa: E402
+from test_bag_reader import make_recording  # noqa: E402 (tests/io is on pytest's pythonpath)
 
 TRANSIENT_LOCAL, VOLATILE = 1, 2  # rmw_qos_durability_policy_t
 

@@ -1,7 +1,6 @@
 """Files crfmap writes get 0666 minus the umask (folders 0777 minus it), as map_saver's do; a replaced file keeps its mode."""
 import os
 import stat
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,8 +12,7 @@ from crfmap.io.bag_writer import write_bag
 from crfmap.io.map_server import save_map
 from crfmap.io.npy_grid import save_npy
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_bag_reader import make_recording  # noqa: E402
+from test_bag_reader import make_recording  # noqa: E402 (tests/io is on pytest's pythonpath)
 
 
 @pytest.fixture(params=[0o022, 0o002])

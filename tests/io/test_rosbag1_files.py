@@ -2,7 +2,6 @@
 import shutil
 import struct
 import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -12,8 +11,7 @@ from crfmap.io.bag_reader import read_bag
 from crfmap.io.bag_writer import write_bag
 from crfmap.io.rosbag1_files import BAG_MAGIC, file_header_record, parse_header_fields
 
-sys.path.insert(0, str(Path(__file__).parent))
-from test_bag_reader import make_recording  # noqa: E402
+from test_bag_reader import make_recording  # noqa: E402 (tests/io is on pytest's pythonpath)
 
 DEBIAN_PYTHON = "/usr/bin/python3"
 

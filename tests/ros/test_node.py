@@ -78,3 +78,42 @@ def test_map_node_skips_bad_scans_and_waits_for_tf():
     assert [line.split("[")[1].split(";")[0] for line in lines] == ["angle_increment", "zero stamp"]
     node.step(0.0)
     assert node.integrated == 0 and len(node.waiting) == 1  # no tf yet
+
+
+def test_map_node_accounts_for_every_scan_and_logs_the_integrated_ones(tmp_path):
+    from types import SimpleNamespace as NS
+
+    from crfmap.mapping import OnlineMapper
+
+    def tf(sec, parent, child, x):
+        return NS(transforms=[NS(header=NS(stamp=NS(sec=sec, nanosec=0), frame_id=parent), child_frame_id=child,
+                                 transform=NS(translation=NS(x=x, y=0.0, z=0.0),
+                                              rotation=NS(x=0.0, y=0.0, z=0.0, w=1.0)))])
+
+    def scan(sec, ranges=(1.0, 2.0, 1.0)):
+        return NS(header=NS(stamp=NS(sec=sec, nanosec=0), frame_id="laser"), angle_min=-0.5, angle_max=0.5,
+                  angle_increment=0.5, range_min=0.1, range_max=5.0, ranges=list(ranges))
+
+    log = tmp_path / "scans.txt"
+    node = MapNode((-5, -5, 5, 5), 0.1, period=0.0, log=lambda line: None, scan_log=log, mapper_options={"margin": 3})
+    sent = []
+    node.publishers.update(map=sent.append, metadata=lambda msg: None)
+    node.on_tf_static(tf(0, "base_link", "laser", 0.1))
+    for sec, x in ((1, 0.0), (3, 1.0)):
+        node.on_tf(tf(sec, "odom", "base_link", x))
+    for sec in (2, 3, 4):
+        node.on_scan(scan(sec))
+    node.on_scan(scan(5, ranges=(1.0, 2.0)))  # another sensor's geometry: skipped, counted
+    while node.step(10.0) == 0.0:  # 0: more scans are ready
+        pass
+    node.close()
+    lines = [line.split() for line in log.read_text().splitlines()]
+    assert [int(v[0]) for v in lines] == [2_000_000_000, 3_000_000_000]  # 4 waits for tf
+    poses = np.array([[float(c) for c in v[1:]] for v in lines])
+    np.testing.assert_allclose(poses, [[0.6, 0.0, 0.0], [1.1, 0.0, 0.0]])
+    assert node.summary().startswith("2 scans integrated of 3 received, 1 still waiting for tf; skipped: 1 on /scan")
+    # the logged scans rebuild the published map exactly
+    mapper = OnlineMapper.for_sensor((-5, -5, 5, 5), 0.1, -0.5, 0.5, 3, 0.1, 5.0, margin=3)
+    for pose in poses:
+        mapper.integrate(np.array([1.0, 2.0, 1.0], np.float32), pose)
+    assert np.array_equal(sent[-1].data, mapper.beliefs().to_int8().reshape(-1))

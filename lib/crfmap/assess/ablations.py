@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from crfmap.assess.calibration import LOGIT_FLOOR
+from crfmap.crf.model.presets import LOGIT_FLOOR
 from crfmap.errors import InputError
 
 ABLATIONS = ("J = 0", "no margin", "no cap")

@@ -48,6 +48,7 @@ import numpy as np
 
 from crfmap.crf.engine import packed as F
 from crfmap.crf.engine.messages import MESSAGE_FLOOR
+from crfmap.errors import InputError
 from crfmap.crf.engine.packed import PASS_ITERATIONS
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.schedules import Checkerboard
@@ -232,9 +233,26 @@ def compile_seconds(cold=True) -> dict:
                   note="first calls of infer() in a new process: float32, float64, and the parallel pass")
 
 
+GROUPS = {  # crfmap bench --only: row groups -> the tasks that make them
+    "machine": ("machine",), "compile": ("compile",), "throughput": ("throughput",), "converge": ("converge",),
+    "memory": ("memory",), "online": ("online",), "node": ("node",), "external": ("external",),
+    "goals": ("start", "explorer", "reproduce", "converge-start"),
+}
+
+
+def _all_tasks(tasks, quick, sizes, converge_sizes):
+    """``tasks`` with every optional group added (``--only`` asks for groups whatever the --no-* flags say)."""
+    from crfmap.bench import goals as G
+
+    extra = [("memory", 1024 if quick else max(sizes)), ("online", None), ("node", None), ("external", None),
+             ("start", None), ("explorer", None), ("reproduce", None),
+             ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)]
+    return tasks + [t for t in extra if t[0] not in {k for k, _ in tasks}]
+
+
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
         external=True, goals=True, work=None, cold=None, external_max_size=EXTERNAL_MAX_SIZE, explorer_changes=None,
-        converge_runs=2, online_tol=None, bandwidth_mbytes=None):
+        converge_runs=2, online_tol=None, bandwidth_mbytes=None, only=None):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI).
 
     The reproduction's lighter settings (notebook 09 says which it used): ``work`` cell updates
@@ -245,6 +263,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     measurement (the best is kept; a smaller warm-up run loads the kernels first); ``online_tol``
     the tolerance of the online run's final map against the offline one (default 1e-7);
     ``bandwidth_mbytes`` the size of each array of the bandwidth triad (default 256, quick 64).
+    ``only``: run just these groups of rows (:data:`GROUPS`, e.g. ``("node",)``), else every one the flags allow.
     """
     from tqdm.auto import tqdm
 
@@ -263,11 +282,18 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         tasks += [("online", None), ("node", None)]
     if external:
         tasks.append(("external", None))
-    if goals:
-        from crfmap.bench import goals as G
+    from crfmap.bench import goals as G
 
+    if goals:
         tasks += [("start", None), ("explorer", None), ("reproduce", None),
                   ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)]
+    if only is not None:
+        unknown = [g for g in only if g not in GROUPS]
+        if unknown or not only:
+            raise InputError("--only", f"unknown row group(s) {', '.join(unknown) or '(none given)'}; known: "
+                             f"{', '.join(GROUPS)}")
+        wanted = {kind for g in only for kind in GROUPS[g]}
+        tasks = [(kind, size) for kind, size in _all_tasks(tasks, quick, sizes, converge_sizes) if kind in wanted]
     bar = tqdm(tasks, desc="bench", disable=not progress)
     bounds = {}  # threads -> float32 one-pass bound [Mcell/s] of this run's bandwidth rows
     for kind, size in bar:

@@ -22,6 +22,9 @@ def add_parser(sub):
     p.add_argument("--no-online", action="store_true", help="skip the Intel-log online mapping run")
     p.add_argument("--no-memory", action="store_true", help="skip the peak-memory child process")
     p.add_argument("--no-external", action="store_true", help="skip the PGMax / PyMaxflow rows (run when installed)")
+    p.add_argument("--only", nargs="+", default=None, metavar="GROUP",
+                   help="run only these groups of rows: machine, compile, throughput, converge, memory, online, "
+                   "node, external, goals (e.g. --only node: the live node's rows)")
     p.add_argument("--no-goals", action="store_true",
                    help="skip issue 13's rows (start times, explorer redraw, reproduce time, 4096^2 convergence)")
     return p
@@ -43,6 +46,6 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--threads", f"thread counts must be between 1 and {cores}, got {list(threads)}")
     for rec in run_bench(sizes=args.sizes, quick=args.quick, repeats=args.repeats, threads=threads,
                          progress=True, online=not args.no_online, memory=not args.no_memory,
-                         external=not args.no_external, goals=not args.no_goals):
+                         external=not args.no_external, goals=not args.no_goals, only=args.only):
         print(to_json(rec) if args.json else format_record(rec), flush=True)
     return 0

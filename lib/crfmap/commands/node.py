@@ -45,6 +45,9 @@ def add_parser(sub):
     mapping.add_argument("--margin", type=int, default=3, metavar="CELLS",
                          help="only cells within CELLS of an observed cell take part (default 3; -1: every cell, "
                          "the thesis's model)")
+    mapping.add_argument("--scan-log", default=None, metavar="FILE",
+                         help="write one line per integrated scan: stamp [ns] and laser pose x y yaw in the fixed "
+                         "frame (what the published map holds)")
     for mode in (refine, mapping):
         mode.add_argument("--backend", choices=BACKENDS, default="dds",
                           help="dds (default): ROS 2 over Cyclone DDS, no ROS install needed; rclpy: a ROS 2 "
@@ -95,7 +98,7 @@ def make_node(args):
     options = {"radius": args.radius, "margin": None if args.margin == -1 else args.margin}
     return MapNode(args.bounds, args.resolution, scan_topic=args.scan, map_topic=args.map,
                    metadata_topic=args.metadata, fixed_frame=args.fixed_frame, period=args.period,
-                   mapper_options=options)
+                   mapper_options=options, scan_log=args.scan_log)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -116,5 +119,6 @@ def run(args: argparse.Namespace) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         backend.close()
+        getattr(node, "close", lambda: None)()
     log_line(f"stopped: {summary}")
     return 0

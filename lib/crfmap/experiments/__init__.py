@@ -7,6 +7,10 @@ Public API (imported on first use, so ``import crfmap.experiments`` stays cheap)
 - :mod:`crfmap.experiments.explorer_view` / ``explorer_panel``: the live figure updated in place, the widget panel
 - :mod:`crfmap.experiments.office_online`: ``map_online``, ``online_numbers``, ``OnlineRun``, ``versus_offline``, ``near_versus_offline``, ``default_table_drift``
 - :mod:`crfmap.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
+- :mod:`crfmap.experiments.thesis_learning`: the learning experiments' tables (notebooks 05, 06): ``make_learners``, ``metrics_table``, ``potentials_rows``, ``results_summary``, ``same_cells_predictions``
+- :mod:`crfmap.experiments.scene_figures`: ``draw`` (a grid with the robot's start), ``landscape_figure``
+- :mod:`crfmap.experiments.occlusion_why`: why the occlusion result does not reproduce (``why_study`` and its tables)
+- :mod:`crfmap.experiments.speed_tables` / ``speed_figures``: notebook 09's tables and goals figure from ``crfmap bench`` records
 """
 from __future__ import annotations
 

@@ -1,12 +1,18 @@
 """Notebook 10's "Published peers" section: every method per recording, calibration, maps side by side.
 
 The peers' maps (:mod:`crfmap.assess.peers`) are cached under ``crfmap.paths.OUT / "cache" / "peers"``,
-keyed by the first half's scans, the grid and the peers' constants, so a rerun does not refit them.
+keyed by the first half's scans, the grid, the peers' constants and the settings, so a rerun does not refit them.
+
+Settings (:class:`PeerSettings`): :data:`FULL` fits the Hilbert map on every scan of the first half with
+the constants chosen on Intel (:mod:`crfmap.mapping.hilbert`); :data:`QUICK` (the notebook's quick run,
+CI) fits it on every 4th scan with features twice as far apart, only to show the section runs: its
+numbers are not the peer's. OctoMap's update is cheap and runs on every scan in both.
 """
 from __future__ import annotations
 
 import hashlib
 import json
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -15,11 +21,27 @@ from crfmap.crf.model.presets import DEFAULT_PRESET
 
 MORE_RECORDINGS = {"csail": "carmen/csail-corrected.log.gz", "fr101": "carmen/freiburg-101-corrected.log.gz"}
 TABLE_ROWS = ("raw", "logodds", "thesis", "graphcut", DEFAULT_PRESET, "octomap", "hilbert")
-CALIBRATED = ("raw", DEFAULT_PRESET, "octomap", "hilbert")
-CACHE_VERSION = 1  # bump when a peer's algorithm changes
+CACHE_VERSION = 2  # bump when a peer's algorithm changes (2: the settings are in the key)
 
 
-def _key(split, name) -> str:
+@dataclass(frozen=True)
+class PeerSettings:
+    """How heavy the peers' fits are: the Hilbert map's scans and feature grid (None: its chosen constant)."""
+
+    hilbert_scan_step: int = 1  # fit on every this-many-th scan of the first half
+    feature_spacing: float | None = None  # [m] between RBF centres
+    length_scale: float | None = None  # [m] RBF width
+    free_spacing: float | None = None  # [m] between free points along a beam
+
+    def hilbert_options(self) -> dict:
+        return {k: v for k, v in asdict(self).items() if k != "hilbert_scan_step" and v is not None}
+
+
+FULL = PeerSettings()
+QUICK = PeerSettings(hilbert_scan_step=4, feature_spacing=0.15, length_scale=0.06, free_spacing=0.15)
+
+
+def _key(split, name, settings=FULL) -> str:
     from crfmap.mapping import hilbert, octomap
 
     h = hashlib.sha256()
@@ -30,25 +52,43 @@ def _key(split, name) -> str:
                  float(scans.angle_increment), float(scans.range_min), float(scans.range_max),
                  octomap.P_HIT, octomap.P_MISS, octomap.CLAMP_MIN, octomap.CLAMP_MAX, hilbert.FEATURE_SPACING,
                  hilbert.LENGTH_SCALE, hilbert.FREE_SPACING, hilbert.EM_ITERATIONS, hilbert.PRIOR_VARIANCE,
-                 hilbert.CUTOFF]
+                 hilbert.CUTOFF, asdict(settings)]
     h.update(json.dumps(constants).encode())
     return h.hexdigest()[:20]
 
 
-def cached_peer_rows(label, split, methods=("octomap", "hilbert"), progress=False):
-    """({name: P}, {name: seconds}) of the peers on ``split``; seconds are those of the fit that made the cache."""
-    from crfmap.assess.peers import peer_rows
+def _fit(split, name, settings, progress):
+    """({name: P}, {name: seconds}) of one peer on ``split`` with ``settings``."""
+    import time
+
+    from crfmap.assess.peers import hilbert_row, peer_rows
+
+    if name != "hilbert" or settings == FULL:
+        return peer_rows(split, [name], progress=progress)
+    start = time.perf_counter()
+    lighter = replace(split, first_scans=split.first_scans.every(settings.hilbert_scan_step)) \
+        if split.first_scans is not None else split
+    p = hilbert_row(lighter, progress=progress, **settings.hilbert_options())
+    return {name: p}, {name: time.perf_counter() - start}
+
+
+def cached_peer_rows(label, split, methods=("octomap", "hilbert"), progress=False, quick=False):
+    """({name: P}, {name: seconds}) of the peers on ``split``; seconds are those of the fit that made the cache.
+
+    ``quick``: the :data:`QUICK` settings (a light Hilbert fit, for CI), else :data:`FULL`.
+    """
     from crfmap.io.atomic import atomic_path
 
+    settings = QUICK if quick else FULL
     folder = paths.OUT / "cache" / "peers"
     rows, seconds = {}, {}
     for name in methods:
-        path = folder / f"{label}-{name}-{_key(split, name)}.npz"
+        path = folder / f"{label}-{name}-{_key(split, name, settings)}.npz"
         if path.exists():
             with np.load(path) as data:
                 rows[name], seconds[name] = data["p"], float(data["seconds"])
             continue
-        got, secs = peer_rows(split, [name], progress=progress)
+        got, secs = _fit(split, name, settings, progress)
         rows[name], seconds[name] = got[name], secs[name]
         folder.mkdir(parents=True, exist_ok=True)
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
@@ -57,7 +97,8 @@ def cached_peer_rows(label, split, methods=("octomap", "hilbert"), progress=Fals
 
 
 def score_all(split, predictions, n_boot, block, seed, temperature=None):
-    """Scores with paired differences to the default preset, calibration, and (given T) the tempered preset."""
+    """Scores with paired differences to the default preset, calibration of every scored row, and (given T) the
+    tempered preset ``<preset>-T``."""
     from crfmap.assess.calibration import apply_temperature, split_calibration
     from crfmap.assess.scansplit import score
 
@@ -65,7 +106,7 @@ def score_all(split, predictions, n_boot, block, seed, temperature=None):
     if temperature is not None:
         preds[f"{DEFAULT_PRESET}-T"] = apply_temperature(preds[DEFAULT_PRESET], temperature)
     scores = score(split, preds, n_boot=n_boot, block=block, seed=seed, reference=DEFAULT_PRESET)
-    calib = split_calibration(split, {n: p for n, p in preds.items() if n in CALIBRATED or n.endswith("-T")})
+    calib = split_calibration(split, preds)  # every row: the baselines as well as the preset and the peers
     return {"scores": scores, "calibration": calib}
 
 

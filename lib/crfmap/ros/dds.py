@@ -103,6 +103,7 @@ class DdsBackend:
         self.participant = DomainParticipant(domain_id(domain))
         self.waitset = WaitSet(self.participant)
         self.readers = []  # (reader, callback, batch)
+        self.topics = {}  # reader -> ROS topic, for lost()
         self.keep = []  # writers, topics and conditions stay alive with the backend
 
     def _topic(self, topic, kind):
@@ -123,7 +124,16 @@ class DdsBackend:
         self.waitset.attach(condition)
         self.keep.append(condition)
         self.readers.append((reader, callback, profile.reader_depth or profile.depth))
+        self.topics[reader] = topic
         return reader
+
+    def lost(self) -> dict:
+        """{topic: samples lost in transport (DDS sample-lost status) or rejected by a full reader}."""
+        out = {}
+        for reader, _, _ in self.readers:
+            n = reader.get_sample_lost_status().total_count + reader.get_sample_rejected_status().total_count
+            out[self.topics[reader]] = out.get(self.topics[reader], 0) + n
+        return out
 
     def publisher(self, topic, kind, profile):
         from cyclonedds.pub import DataWriter
@@ -145,6 +155,7 @@ class DdsBackend:
 
     def close(self):
         self.readers.clear()
+        self.topics.clear()
         self.keep.clear()
         self.waitset = None
         self.participant = None  # deleting the participant deletes its entities

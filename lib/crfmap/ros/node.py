@@ -8,7 +8,11 @@
 - :class:`MapNode` subscribes to sensor_msgs/LaserScan and tf, places each scan at its own
   stamp once tf covers it (:class:`crfmap.ros.tf_buffer.TfBuffer`), integrates it with
   :class:`crfmap.mapping.OnlineMapper`, and publishes the beliefs on ``/map`` and
-  ``/map_metadata`` at most once per ``period``.
+  ``/map_metadata`` at most once per ``period``. Every scan is accounted for: received,
+  integrated, skipped (with the reason) or still waiting for tf, and the backend's count of scans
+  lost in transport (best-effort samples dropped, :meth:`DdsBackend.lost`) joins the summary; a
+  ``scan_log`` file gets one line per integrated scan (stamp [ns], laser pose x y yaw in the fixed
+  frame), so what a published map holds can be rebuilt exactly.
 
 A message the node cannot use is skipped and logged once per kind with the reason
 (:class:`BadMessages`); the node never publishes a map made from one. :func:`spin` runs a node
@@ -141,7 +145,7 @@ class MapNode:
     """
 
     def __init__(self, bounds, resolution=0.05, scan_topic="/scan", map_topic="/map", metadata_topic="/map_metadata",
-                 fixed_frame=None, period=1.0, mapper_options=None, log=log_line, max_waiting=1000):
+                 fixed_frame=None, period=1.0, mapper_options=None, log=log_line, max_waiting=1000, scan_log=None):
         self.bounds = tuple(float(v) for v in bounds)
         self.resolution = float(resolution)
         self.scan_topic, self.map_topic, self.metadata_topic = scan_topic, map_topic, metadata_topic
@@ -160,7 +164,14 @@ class MapNode:
         self.max_waiting = int(max_waiting)
         self.first = None  # the first good scan: the sensor the mapper is made for
         self.mapper = None
+        self.received = 0  # well-formed scans
         self.integrated = 0
+        self.scan_log = None
+        if scan_log is not None:
+            try:
+                self.scan_log = open(scan_log, "w", buffering=1, encoding="utf-8")  # line-buffered: readable as it grows
+            except OSError as exc:
+                raise InputError("--scan-log", f"cannot write {scan_log}: {exc.strerror}") from None
         self.published_scans = 0
         self.last_stamp_ns = None
         self.last_publish = -float("inf")
@@ -179,6 +190,7 @@ class MapNode:
             return
         if self.first is None:
             self.first = msg
+        self.received += 1
         self.waiting.append(msg)
         if len(self.waiting) > self.max_waiting:
             self.waiting.popleft()
@@ -225,6 +237,8 @@ class MapNode:
                 continue
             self.integrated += 1
             self.last_stamp_ns = scan.stamp_ns
+            if self.scan_log is not None:
+                self.scan_log.write(f"{scan.stamp_ns} {pose[0]!r} {pose[1]!r} {pose[2]!r}\n")
 
     def step(self, now) -> float:
         """Integrate the scans tf now covers (for a slice of time), publish if due; seconds until the next call."""
@@ -243,12 +257,19 @@ class MapNode:
         return IDLE_SECONDS
 
     def summary(self) -> str:
-        return (f"{self.integrated} scans integrated, {len(self.waiting)} still waiting for tf; "
-                f"skipped: {self.bad.summary()}")
+        return (f"{self.integrated} scans integrated of {self.received} received, {len(self.waiting)} still waiting "
+                f"for tf; skipped: {self.bad.summary()}")
+
+    def close(self):
+        if self.scan_log is not None:
+            self.scan_log.close()
+            self.scan_log = None
 
 
 def spin(node, backend, stop, log=log_line):
     """Run ``node`` over ``backend`` until ``stop`` (a threading.Event) is set; returns the node's summary.
+
+    A backend that can tell samples lost in transport (``lost() -> {topic: count}``) adds them to it.
 
     Callbacks only queue what arrives (some backends call them from their own threads); the
     node handles messages and works in this thread, so its state needs no lock.
@@ -272,4 +293,5 @@ def spin(node, backend, stop, log=log_line):
         if stop.is_set():
             break
         wait = node.step(time.monotonic())
-    return node.summary()
+    lost = getattr(backend, "lost", dict)()
+    return node.summary() + "".join(f"; lost in transport on {topic}: {n}" for topic, n in lost.items() if n)

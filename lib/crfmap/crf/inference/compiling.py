@@ -19,6 +19,8 @@ _announced = set()  # (fast, schedule, parallel) calls already announced
 
 def needs_compiling(dispatcher) -> bool:
     """Whether calling ``dispatcher`` will compile it (not compiled here, nothing in the disk cache)."""
+    if not hasattr(dispatcher, "signatures"):  # NUMBA_DISABLE_JIT=1: a plain function, which never compiles
+        return False
     if dispatcher.signatures or id(dispatcher) in _checked:
         return False
     try:  # numba's cache index: empty when missing or written for another version of the source

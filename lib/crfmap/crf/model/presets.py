@@ -19,6 +19,11 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
   information spreads only a few cells, and LBP runs only within ``margin`` cells of an
   observation: space far from every observation stays exactly 0.5 (unknown).
 
+``temperature`` T (default 1: no change) scales the output's log-odds, ``P' = sigmoid(logit(P) / T)``
+(:func:`temper`), applied to the whole refined map: T > 1 softens an over-confident map, T < 1 sharpens
+an under-confident one; P = 0.5 (unknown) stays 0.5. :func:`crfmap.assess.calibration.fit_split_temperature`
+fits it on a recording's scan split.
+
 The per-cell strength needs no kernel change: it is a per-cell link table
 ``[[w, 1], [1, w]]`` with ``w = exp(|l|)`` applied to the hard observation
 ``o = (x > 0)``, and such a table turns that observation into exactly the probability
@@ -50,6 +55,7 @@ from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
 CRITICAL_COUPLING = math.log(1 + math.sqrt(2)) / 2  # square-lattice Ising, J_c = 0.4407
+LOGIT_FLOOR = 1e-6  # P is clipped to [LOGIT_FLOOR, 1 - LOGIT_FLOOR] before its logit is tempered (logit(0) is -inf)
 DEFAULT_PRESET = "certainty"  # what crfmap infer / evaluate run by default (the recommended preset below)
 
 
@@ -90,6 +96,27 @@ def evidence_from_probability(probability) -> np.ndarray:
     return np.where(p == 0.5, 0.0, x)
 
 
+def temper(probability, temperature: float) -> np.ndarray:
+    """``sigmoid(logit(P) / T)``: the output of a preset of temperature T (P clipped to [1e-6, 1 - 1e-6] first).
+
+    >>> temper(np.array([0.5, 0.9]), 2.0).round(3).tolist()
+    [0.5, 0.75]
+    """
+    t = _check_temperature(temperature)
+    q = np.clip(np.asarray(probability, dtype=np.float64), LOGIT_FLOOR, 1 - LOGIT_FLOOR)
+    return 1.0 / (1.0 + np.exp(-(np.log(q) - np.log1p(-q)) / t))
+
+
+def _check_temperature(temperature) -> float:
+    try:
+        t = float(temperature)
+    except (TypeError, ValueError):
+        t = float("nan")
+    if isinstance(temperature, bool) or not (math.isfinite(t) and t > 0):
+        raise InputError("temperature", f"must be a positive number, got {temperature!r}")
+    return t
+
+
 @dataclass(frozen=True)
 class Preset:
     """One named CRF configuration (see the module docstring)."""
@@ -104,6 +131,10 @@ class Preset:
     margin: int | None = None  # infer only within this many cells of an observation (None: everywhere)
     link: np.ndarray = field(default_factory=lambda: DEFAULT_LINK.copy(), repr=False)  # observation-cell table
     pairing: str = "receiver"  # how a non-symmetric hidden table applies to an edge
+    temperature: float = 1.0  # output P' = sigmoid(logit(P) / T); 1 leaves LBP's P as it is (see temper)
+
+    def __post_init__(self):
+        object.__setattr__(self, "temperature", _check_temperature(self.temperature))
 
     @property
     def coupling(self) -> float:
@@ -139,9 +170,10 @@ class Preset:
         """Run LBP with this preset: on counts (``hits``, ``passes``) or on a grid's P.
 
         Returns the :class:`~crfmap.crf.inference.result.LBPResult`; outside :meth:`region` the beliefs are
-        the observation itself (0.5 where nothing was observed). ``within`` (a boolean mask such as a bound
-        around the robot) further limits the cells that send messages, as ``infer``'s ``region``. ``options``
-        go to :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...).
+        the observation itself (0.5 where nothing was observed); a ``temperature`` other than 1 then
+        tempers the whole map (:func:`temper`). ``within`` (a boolean mask such as a bound around the robot)
+        further limits the cells that send messages, as ``infer``'s ``region``. ``options`` go to
+        :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...).
 
         >>> r = get_preset("certainty").refine(np.array([[0.5, 0.9, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]]))
         >>> r.converged, float(r.beliefs.probability[0, -1])
@@ -169,6 +201,9 @@ class Preset:
         result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
         if own is not None:  # outside the preset's region nothing was inferred: keep the observation
             result.beliefs = result.beliefs.with_probability(np.where(own, result.beliefs.probability, unary))
+        if self.temperature != 1.0:  # the whole output, observation-only cells too
+            probability = temper(result.beliefs.probability, self.temperature)
+            result.beliefs = result.beliefs.with_probability(probability.astype(result.beliefs.probability.dtype))
         return result
 
 
