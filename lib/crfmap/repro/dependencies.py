@@ -143,7 +143,7 @@ def module_sources(modules) -> list[Path]:
     """The library files that importing the given crfmap modules runs, transitively (sorted).
 
     >>> [p.name for p in module_sources(["crfmap.errors"])]
-    ['__init__.py', '_numba_cache.py', 'errors.py', 'grid.py']
+    ['__init__.py', '_numba_cache.py', 'environment.py', 'errors.py', 'grid.py']
     """
     return sorted(_closure(set(modules)))
 
