@@ -50,9 +50,11 @@ kernel-coverage: $(STAMP)
 # the clock starts before the venv and the warm-up, so the record is what `make reproduce` costs
 reproduce:
 	@echo $$(date +%s) > .reproduce-started
+	@test -e $(STAMP) || touch .reproduce-new-venv
 	$(MAKE) --no-print-directory warm
-	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --started-at "$$(cat .reproduce-started)"
-	@rm -f .reproduce-started
+	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --started-at "$$(cat .reproduce-started)" \
+	  $$(test -e .reproduce-new-venv && echo --new-venv)
+	@rm -f .reproduce-started .reproduce-new-venv
 
 # make sweep SWEEP=04_noise   (workflow/sweeps/04_noise.yaml -> out/runs/04_noise/; MAX_POINTS=N raises the
 # limit of 200 points). Without SWEEP it would be the whole reproduction: refused before anything runs.

@@ -150,6 +150,36 @@ def test_reproduce_row_prefers_the_same_runs_wall_clock(tmp_path):
     assert reproduce_record(path, wall)["seconds"] == 12.0
 
 
+def test_wall_record_keeps_every_run(tmp_path):
+    from crfmap.repro.reproduce import write_wall_record
+
+    wall = tmp_path / "reproduce_wall.json"
+    wall.write_text(json.dumps({"workflow_seconds": 300.0, "cores": 2, "finished": "x", "make_seconds": 400.0}))
+    write_wall_record(90.0, started_at=None, path=wall, new_venv=True)  # a record of the old one-run form
+    write_wall_record(12.0, started_at=None, path=wall)
+    data = json.loads(wall.read_text())
+    assert [r["workflow_seconds"] for r in data["runs"]] == [300.0, 90.0, 12.0]
+    assert [r.get("new_venv") for r in data["runs"]] == [None, True, False]
+    assert data["workflow_seconds"] == 12.0 and data["new_venv"] is False  # the top level is the last run
+    wall.write_text("not json")
+    write_wall_record(5.0, path=wall)  # an unreadable record is replaced, not kept half
+    assert [r["workflow_seconds"] for r in json.loads(wall.read_text())["runs"]] == [5.0]
+
+
+def test_reproduce_row_names_the_last_fresh_clone_run(tmp_path):
+    from crfmap.bench.goals import reproduce_record
+    from crfmap.repro.reproduce import write_wall_record
+
+    path, wall = tmp_path / "reproduce_timings.json", tmp_path / "reproduce_wall.json"
+    write_wall_record(150.0, started_at=0.0, path=wall, new_venv=True)
+    write_wall_record(10.0, started_at=None, path=wall)
+    path.write_text(json.dumps({"seconds": {"01_a.ipynb": 12.0}, "total_seconds": 12.0}))
+    import os
+    os.utime(path, (1e9, 1e9))
+    rec = reproduce_record(path, wall)
+    assert rec["runs_recorded"] == 2 and rec["last_fresh_clone_seconds"] > 1e9 and rec["seconds"] == 10.0
+
+
 def test_coarse_start_option_is_one_that_changes_the_start():
     from crfmap.bench.goals import COARSE_START_OPTIONS, coarse_start_option
 

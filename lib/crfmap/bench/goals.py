@@ -229,8 +229,12 @@ def reproduce_record(path=None, wall_path=None) -> dict:
     seconds = wall.get("make_seconds") or wall.get("workflow_seconds")
     what = ("wall clock of `make reproduce` (venv, warm-up, workflow)" if wall.get("make_seconds") else
             "wall clock of the workflow" if wall else "no wall-clock record: the notebooks' summed run times")
+    fresh = [r for r in wall.get("runs", []) if isinstance(r, dict) and r.get("new_venv") and r.get("make_seconds")]
     return record("reproduce", None, None, None, None, seconds=seconds if wall else data.get("total_seconds"),
                   goal_seconds=REPRODUCE_GOAL, workflow_seconds=wall.get("workflow_seconds"),
+                  new_venv=wall.get("new_venv"), runs_recorded=len(wall.get("runs", [])),
+                  last_fresh_clone_seconds=fresh[-1]["make_seconds"] if fresh else None,
+                  last_fresh_clone_finished=fresh[-1].get("finished") if fresh else None,
                   notebook_seconds_total=data.get("total_seconds"), notebook_seconds=notebooks, slowest=slowest,
                   recorded=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime(path.stat().st_mtime)),
                   **{f"record_{k}": v for k, v in extra.items()},

@@ -23,6 +23,7 @@ from pathlib import Path
 
 from crfmap import paths
 from crfmap.repro.report import markdown_table
+from crfmap.repro.timings import slowest_cells_table
 
 # The data files the notebooks read (folders: every file inside), where each came from.
 DATA_ORIGINS = {
@@ -141,6 +142,7 @@ def describe(data: bool = True) -> dict:
                                      ).rstrip("\n") if data else "",
         "seeds": "; ".join(f"{notebook}: {seeds}" for notebook, seeds in notebook_seeds()),
         "wall": wall_sentence(wall),
+        "slowest_cells": slowest_cells_table(paths.OUT / "notebooks").rstrip("\n"),
     }
 
 

@@ -103,6 +103,8 @@ def main(argv=None) -> int:
     parser.add_argument("--profile", type=Path, help="a workflow profile folder, e.g. workflow/profiles/slurm")
     parser.add_argument("--started-at", type=float, help="Unix time `make reproduce` started (before the venv "
                         "and the warm-up): recorded with the workflow's own time after a full run")
+    parser.add_argument("--new-venv", action="store_true", help="make created the virtual environment in this "
+                        "run (a fresh clone): recorded with the run")
     parser.add_argument("extra", nargs=argparse.REMAINDER, help="-- then arguments for snakemake")
     args = parser.parse_args(argv)
     try:
@@ -169,7 +171,7 @@ def _reproduce(args) -> int:
     print(f"reproduce: {'dry run' if args.dry_run else 'workflow'} {'finished' if code == 0 else 'failed'} "
           f"in {seconds:.1f} s (outputs under {directory})", file=sys.stderr)
     if code == 0 and targets == ["all"] and not (args.dry_run or args.quick or extra or args.profile):
-        write_wall_record(seconds, args.started_at, args.cores)
+        write_wall_record(seconds, args.started_at, args.cores, new_venv=args.new_venv)
     return code
 
 
@@ -186,12 +188,14 @@ def estimate(sweep, cores) -> str:
             f"{describe(total)} on {cores} core{'s' * (cores != 1)} ({describe(each)} per point at {settings})")
 
 
-def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None) -> Path:
-    """Record a full run's wall-clock time (``out/logs/reproduce_wall.json``), read by ``crfmap bench``.
+def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None, new_venv=False) -> Path:
+    """Record a full run's wall-clock time in ``out/logs/reproduce_wall.json``, read by ``crfmap bench``.
 
     ``started_at`` (Unix time) is when ``make reproduce`` began, before the venv and the warm-up;
     without it only the workflow's own time is known. A run that found nothing to do records that
-    too (its time is not a reproduction's): ``workflow_seconds`` is what this run took.
+    too (its time is not a reproduction's): ``workflow_seconds`` is what this run took. The file's
+    top-level fields are the last run's; ``runs`` lists every run recorded there, oldest first, so a
+    fresh clone's first run (``new_venv``) stays on record after quick reruns.
     """
     import json
 
@@ -201,10 +205,18 @@ def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None) -> 
     now = time.time()
     record = {"workflow_seconds": round(float(workflow_seconds), 1), "cores": int(cores),
               "finished": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(now)),
-              "make_seconds": None if started_at is None else round(now - float(started_at), 1)}
+              "make_seconds": None if started_at is None else round(now - float(started_at), 1),
+              "new_venv": bool(new_venv)}
+    runs = []
+    try:
+        earlier = json.loads(path.read_text())
+        runs = earlier.get("runs") or [{k: v for k, v in earlier.items() if k != "runs"}]
+    except (OSError, ValueError, AttributeError):
+        pass  # no record yet, or an unreadable one: start a new list (the old file is replaced whole)
+    runs = [r for r in runs if isinstance(r, dict)] + [record]
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
-        Path(tmp).write_text(json.dumps(record, indent=1) + "\n")
+        Path(tmp).write_text(json.dumps({**record, "runs": runs}, indent=1) + "\n")
     return path
 
 

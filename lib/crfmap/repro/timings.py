@@ -48,3 +48,55 @@ def describe(seconds) -> str:
     if seconds < 2 * 86400:
         return f"{seconds / 3600:.1f} h"
     return f"{seconds / 86400:.1f} days"
+
+
+def slowest_cells(executed, n=5) -> list:
+    """The ``n`` slowest code cells of each executed notebook in folder ``executed``, slowest first.
+
+    Read from the durations papermill stores in each cell's metadata. One row per cell:
+    ``(notebook stem, cell index, seconds, its first line of code that is not an import)``; a notebook no run has
+    executed yet is absent, a file that is not a notebook is named in a ValueError.
+    """
+    rows = []
+    for path in sorted(Path(executed).glob("*.ipynb")):
+        try:
+            cells = json.loads(path.read_text())["cells"]
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise ValueError(f"{path}: not an executed notebook ({exc})") from None
+        timed = []
+        for index, cell in enumerate(cells):
+            seconds = (cell.get("metadata", {}).get("papermill") or {}).get("duration")
+            if cell.get("cell_type") == "code" and isinstance(seconds, (int, float)):
+                timed.append((path.stem, index, float(seconds), _telling_line(cell.get("source", ""))))
+        rows += sorted(timed, key=lambda row: -row[2])[:n]
+    return rows
+
+
+def _telling_line(source) -> str:
+    r"""The first line of a cell's code that is not an import (imports say little about the cost).
+
+    >>> _telling_line(["import time\n", "from a import b\n", "\n", "run(x)\n"])
+    'run(x)'
+    """
+    lines = [line.strip() for line in "".join(source).splitlines() if line.strip()]
+    telling = [line for line in lines if not line.startswith(("import ", "from "))]
+    return (telling or lines or [""])[0]
+
+
+def slowest_cells_table(executed, n=5, width=60) -> str:
+    """:func:`slowest_cells` as a markdown table (``notebook | cell | s | code``), or a sentence when none ran.
+
+    >>> slowest_cells_table("/nonexistent")
+    'no executed notebooks under /nonexistent'
+    """
+    rows = slowest_cells(executed, n)
+    if not rows:
+        return f"no executed notebooks under {executed}"
+    from crfmap.repro.report import markdown_table
+
+    def code(text):
+        text = text if len(text) <= width else text[:width - 3] + "..."
+        return "`" + text.replace("`", "'") + "`"
+
+    return markdown_table(["notebook", "cell", "s", "first line"],
+                          [[stem, index, f"{seconds:.1f}", code(first)] for stem, index, seconds, first in rows])

@@ -212,7 +212,9 @@ def _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb,
         _send(msg, un, act, use_act, c, y, k0 + first, n, co, lo, hi, True, w_n, w_s, cb, ty)
 
 
-@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+# not inlined: both trapezoids call this one compiled row (a function call per row costs nothing next to
+# a row's cells, while inlining it twice doubled the kernels' compile time, the first call's wait)
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb):
     """Colour c of row y sends: the cells of the row's active segments (one row of a half-sweep)."""
     ty = y // tile_h
