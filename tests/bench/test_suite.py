@@ -84,7 +84,7 @@ def test_quick_bench_has_a_row_for_each_user_facing_goal(quick_records):
     for r in quick_records:
         rows.setdefault(r["method"], []).append(r)
     assert {"infer-vs-kernel", "kernel-vs-bound", "start-cold", "start-warm", "start-env", "explorer-redraw", "explorer-scene-change",
-            "reproduce", "converge-start"} <= set(rows)
+            "reproduce", "converge-start", "preset-converge"} <= set(rows)
     # end to end against the same run's kernel, same size / dtype / threads
     (ratio,) = rows["infer-vs-kernel"]
     (kernel,) = [r for r in rows["crfmap-fast"] if r["dtype"] == "float32" and r["threads"] == ratio["threads"]]
@@ -112,6 +112,19 @@ def test_quick_bench_has_a_row_for_each_user_facing_goal(quick_records):
     uniform = [r for r in rows["converge-start"] if r["start"] == "uniform"]
     assert uniform[0]["converged"] and uniform[0]["size"] == 256 and uniform[0]["max_belief_difference_vs_uniform"] == 0
     assert len(rows["converge-start"]) == 2  # the coarse start's row, measured or saying infer() has none
+    # the default preset, converged, against 5 iterations of the baseline on the same shape
+    (preset,) = rows["preset-converge"]
+    assert preset["map"] == "office" and preset["shape"] == [256, 256] and preset["converged"]
+    assert preset["goal_seconds"] == pytest.approx(5 * preset["baseline_seconds_per_iteration"])
+    assert preset["ratio_to_goal"] == pytest.approx(preset["seconds"] / preset["goal_seconds"])
+
+
+def test_preset_row_says_which_map_is_missing(monkeypatch, tmp_path):
+    from crfmap.bench.goals import preset_converge
+
+    monkeypatch.setenv("CRFMAP_DATA", str(tmp_path))  # no logs here
+    (row,) = preset_converge(maps=("aces",))
+    assert row["seconds"] is None and row["note"].startswith("skipped: ") and "aces-corrected.log.gz" in row["note"]
 
 
 def test_reproduce_row_reads_the_last_runs_record(tmp_path):

@@ -36,14 +36,27 @@ def test_goals_rows_in_order_with_their_goals():
         {"method": "start-cold", "seconds": None},
         {"method": "start-env", "seconds": 1.2, "minus_warm_seconds": 0.04},
         {"method": "converge-start", "size": 4096, "start": "uniform", "seconds_to_converge": None, "note": "skipped"},
+        {"method": "preset-converge", "map": "intel", "shape": [741, 795], "preset": "certainty", "iterations": 80,
+         "seconds": 0.1234, "goal_seconds": 0.2685},
+        {"method": "preset-converge", "map": "aces", "seconds": None, "note": "skipped: aces missing"},
     ]
     rows = tables.goals_rows(records, start_goal=1.0, converge_goal=2.0)
     assert [r[1] for r in rows[:2]] == ["512^2", "1024^2"]  # by size
     assert rows[0] == ["infer() end to end / kernel, float32, 2 threads, 10 it. per call", "512^2", 0.85, ">= 0.8"]
     assert rows[2] == ["kernel, float32, 1 thread [Mcell/s]", "512^2", 322, ">= 300"]
-    assert rows[3] == ["crfmap infer: empty cache minus warm [s]", "512^2", None, "not timed here: `make bench`"]
+    assert rows[3] == ["crfmap infer, first call with an empty cache [s]", "512^2", None, "not timed here: `make bench`"]
     assert rows[4] == ["crfmap infer: environment's cache minus warm [s]", "512^2", 0.0, "<= 1"]
     assert rows[5] == ["converge, uniform start", "4096^2", None, "skipped"]
+    assert rows[6] == ["default preset (certainty) to convergence, intel, 80 it., float64 [s]", "741x795", 0.123,
+                       "<= 0.269 (5 NumPy-baseline it.)"]
+    assert rows[7] == ["default preset to convergence, aces", "", None, "skipped: aces missing"]
+
+
+def test_goals_rows_give_the_empty_cache_first_call_against_its_goal():
+    records = [{"method": "start-cold", "seconds": 18.04, "minus_warm_seconds": 17.2, "goal_seconds": 20.0}]
+    rows = tables.goals_rows(records, start_goal=2.0, converge_goal=1.0)
+    assert rows == [["crfmap infer, first call with an empty cache [s]", "512^2", 18.0, "<= 20"],
+                    ["crfmap infer: empty cache minus warm [s]", "512^2", 17.2, "(compiling)"]]
 
 
 def test_throughput_rows_pick_the_reported_sizes_and_relate_to_baseline_and_bound():

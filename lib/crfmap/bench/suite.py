@@ -236,7 +236,7 @@ def compile_seconds(cold=True) -> dict:
 GROUPS = {  # crfmap bench --only: row groups -> the tasks that make them
     "machine": ("machine",), "compile": ("compile",), "throughput": ("throughput",), "converge": ("converge",),
     "memory": ("memory",), "online": ("online",), "node": ("node",), "external": ("external",),
-    "goals": ("start", "explorer", "reproduce", "converge-start"),
+    "goals": ("start", "explorer", "reproduce", "converge-start", "preset-converge"),
 }
 
 
@@ -246,13 +246,14 @@ def _all_tasks(tasks, quick, sizes, converge_sizes):
 
     extra = [("memory", 1024 if quick else max(sizes)), ("online", None), ("node", None), ("external", None),
              ("start", None), ("explorer", None), ("reproduce", None),
-             ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)]
+             ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE),
+             ("preset-converge", None)]
     return tasks + [t for t in extra if t[0] not in {k for k, _ in tasks}]
 
 
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
         external=True, goals=True, work=None, cold=None, external_max_size=EXTERNAL_MAX_SIZE, explorer_changes=None,
-        converge_runs=2, online_tol=None, bandwidth_mbytes=None, only=None):
+        converge_runs=2, online_tol=None, bandwidth_mbytes=None, only=None, preset_maps=None):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI).
 
     The reproduction's lighter settings (notebook 09 says which it used): ``work`` cell updates
@@ -263,6 +264,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     measurement (the best is kept; a smaller warm-up run loads the kernels first); ``online_tol``
     the tolerance of the online run's final map against the offline one (default 1e-7);
     ``bandwidth_mbytes`` the size of each array of the bandwidth triad (default 256, quick 64).
+    ``preset_maps``: the maps of the default preset's convergence rows (default: the Intel and ACES logs
+    and a 4096² office; quick: a 256² office; see :data:`crfmap.bench.goals.PRESET_MAPS`).
     ``only``: run just these groups of rows (:data:`GROUPS`, e.g. ``("node",)``), else every one the flags allow.
     """
     from tqdm.auto import tqdm
@@ -286,7 +289,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
 
     if goals:
         tasks += [("start", None), ("explorer", None), ("reproduce", None),
-                  ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)]
+                  ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE),
+                  ("preset-converge", None)]
     if only is not None:
         unknown = [g for g in only if g not in GROUPS]
         if unknown or not only:
@@ -359,6 +363,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             yield G.reproduce_record()
         elif kind == "converge-start":
             yield from G.converge_start(size, max(threads), runs=converge_runs)
+        elif kind == "preset-converge":
+            yield from G.preset_converge(quick, maps=preset_maps, threads=max(threads))
 
 
 def format_record(rec) -> str:
