@@ -37,11 +37,17 @@ TYPST_HEADER = """\
 #set par(justify: true)
 #set figure(numbering: none)
 #show figure.caption: set text(size: 8.5pt)
-// Images float to the top or bottom of a page instead of leaving the rest of a page blank; tables stay in the
-// text's order, their caption above them and kept with them, and may continue on the next page.
+// Images float to the top or bottom of a page instead of leaving the rest of a page blank, but not past the
+// next section's heading (pending floats are placed first). Tables stay in the text's order with their caption
+// above them; a table shorter than a page is kept whole (its caption never ends a page alone), a longer one
+// continues on the next page.
 #show figure.where(kind: image): set figure(placement: auto)
+#show heading.where(level: 2): it => { place.flush(); it }
 #show figure.where(kind: table): set figure.caption(position: top)
-#show figure.where(kind: table): set block(breakable: true)
+#show figure.where(kind: table): it => layout(size => {
+  let h = measure(block(width: size.width, it)).height
+  block(breakable: h > 22cm, it)
+})
 #show table: set text(size: 6.5pt)
 #show table.cell: set par(justify: false)
 #set table(inset: 3pt)
