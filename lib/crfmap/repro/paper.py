@@ -83,6 +83,41 @@ def attach_caption(table_text: str) -> str:
     return text + ("\n\n" + "\n".join(rest).strip() if any(r.strip() for r in rest) else "")
 
 
+# Code names that generated tables carry (notebook labels, parameter names), and the plain words the report
+# prints instead: a reader of the PDF should not need the library's identifiers. Longer names first.
+PLAIN_WORDS = (
+    ("crfmap.assess.learning.learn_thesis, ", ""),
+    ("LBP crfmap.crf.inference.reference.reference_lbp", "LBP (crfmap's reference implementation)"),
+    ("reference_lbp", "reference LBP"),
+    ("learn_pseudolikelihood", "pseudo-likelihood learner"),
+    ("learn_gradient", "gradient learner"),
+    ("learn_thesis", "thesis learner"),
+    ("schedule 'thesis', max_iter=1", "the thesis's schedule, one iteration"),
+    ("the 'thesis' schedule", "the thesis's schedule"),
+    ("p_hit = ", "P(hit) = "),
+    ("p_miss = ", "P(miss) = "),
+    ("logodds_limit = ", "log-odds limit = "),
+    ("occupied_first", "occupied, first hit"),
+    ("occupied_further", "occupied, further hits"),
+    ("free_first", "free, first pass"),
+    ("free_further", "free, further passes"),
+    ("equal to build_grid cell for cell", "equal to the offline grid builder's, cell for cell"),
+    ("noisy_image sigma", "noisy image, sigma"),
+    ("(crfmap.bench.goals; ", "("),
+)
+
+
+def plain_words(text: str) -> str:
+    """A generated table with the library's code names replaced by the words the report uses.
+
+    >>> plain_words("| After LBP (learn_thesis, converged) | 0.02 |")
+    '| After LBP (thesis learner, converged) | 0.02 |'
+    """
+    for code, words in PLAIN_WORDS:
+        text = text.replace(code, words)
+    return text
+
+
 _GOAL = re.compile(r"^\s*(>=|<=)\s*([0-9.eE+-]+)")
 
 
@@ -158,7 +193,7 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
                 missing.append(f"table {name}")
                 return f"*(table {name} not generated)*"
             _check(f, strict)
-            return attach_caption(provenance.strip(f.read_text()))
+            return attach_caption(plain_words(provenance.strip(f.read_text())))
         if kind == "figure":
             f = paths.FIGURES / f"{name}.png"
             if not f.exists():
