@@ -149,3 +149,23 @@ def test_the_generated_pdf_contains_every_figure():
         pytest.skip("no generated paper here (run make reproduce)")
     placed = re.findall(r"\]\(([^()\s]+\.png)\)", md.read_text())  # captions may hold brackets themselves
     assert placed and pdf_image_count(pdf) == len(placed)
+
+
+MAIN_TEXT_PAGES = 15  # issue 23: at most 15 pages of main text, the rest in the appendix of the same PDF
+
+
+def test_the_generated_main_text_fits_its_page_budget():
+    """After `make reproduce`: Appendix A, the first page after the main text, starts on page 16 at the latest."""
+    from pypdf import PdfReader
+
+    from crfmap import paths
+
+    pdf = paths.GENERATED / "paper.pdf"
+    if not pdf.exists():
+        pytest.skip("no generated paper here (run make reproduce)")
+    assert "## Appendix A" in TEMPLATE.read_text()
+    pages = PdfReader(str(pdf)).pages
+    first = next((i for i, page in enumerate(pages)
+                  if re.search(r"^\s*Appendix A:", page.extract_text() or "", re.M)), None)
+    assert first is not None, "no page of paper.pdf starts Appendix A"
+    assert first <= MAIN_TEXT_PAGES, f"the main text takes {first} pages (at most {MAIN_TEXT_PAGES})"
