@@ -22,6 +22,7 @@ DEFINITIONS = {"0", "1", "2", "3", "9", "10", "0.9", "0.1", "0.5", "0.25", "0.75
 REFERENCE = re.compile(r"\b(?:Figs?\.|Tables?|eqs?\.|sec\.|Listing|notebooks?)\s+\d+(?:\.\d+)*"
                        r"(?:\s*(?:-|,|and)\s*\d+(?:\.\d+)*)*", re.IGNORECASE)
 PLACEHOLDER = re.compile(r"\{\{[^}]*\}\}")
+NAMES = re.compile(r"\b(?:Freiburg building 101|ROS [12])\b")  # names of data sets, not quantities
 CITATION = re.compile(r"\[\d+(?:\s*,\s*\d+)*\]")  # "[6]", "[12, 13]": numbered references
 REFERENCE_LIST = re.compile(r"^## References\n.*?(?=^## |^```|\Z)", re.M | re.S)  # years and pages of the cited works
 FENCED = re.compile(r"^```.*?^```", re.M | re.S)  # commands and raw Typst
@@ -36,6 +37,7 @@ def typed_numbers(text: str) -> list:
     text = re.sub(r"`[^`]*`", " ", text)  # code: names and commands
     text = PLACEHOLDER.sub(" ", text)
     text = REFERENCE.sub(" ", text)
+    text = NAMES.sub(" ", text)
     text = CITATION.sub(" ", text)
     found = []
     for m in NUMBER.finditer(text):
