@@ -133,6 +133,7 @@ PLAIN_WORDS = (
     ("equal to build_grid cell for cell", "equal to the offline grid builder's, cell for cell"),
     ("noisy_image sigma", "noisy image, sigma"),
     ("(crfmap.bench.goals; ", "("),
+    (", crfmap.crf.inference.lbp.message", ", by crfmap's message function"),
     # the report's words for the tables' jargon (the glossary at the report's start)
     (" with the thesis's pairing (receiver) and the proper pairwise one (oriented)",
      " with the thesis's pairing and the proper pairwise one"),
