@@ -22,6 +22,7 @@ DEFINITIONS = {"0", "1", "2", "3", "9", "10", "0.9", "0.1", "0.5", "0.25", "0.75
 REFERENCE = re.compile(r"\b(?:Figs?\.|Tables?|eqs?\.|sec\.|Listing|notebooks?)\s+\d+(?:\.\d+)*"
                        r"(?:\s*(?:-|,|and)\s*\d+(?:\.\d+)*)*", re.IGNORECASE)
 PLACEHOLDER = re.compile(r"\{\{[^}]*\}\}")
+NAMES = re.compile(r"\b(?:Freiburg building 101|ROS [12])\b")  # names of data sets, not quantities
 CITATION = re.compile(r"\[\d+(?:\s*,\s*\d+)*\]")  # "[6]", "[12, 13]": numbered references
 REFERENCE_LIST = re.compile(r"^## References\n.*?(?=^## |^```|\Z)", re.M | re.S)  # years and pages of the cited works
 FENCED = re.compile(r"^```.*?^```", re.M | re.S)  # commands and raw Typst
@@ -36,6 +37,7 @@ def typed_numbers(text: str) -> list:
     text = re.sub(r"`[^`]*`", " ", text)  # code: names and commands
     text = PLACEHOLDER.sub(" ", text)
     text = REFERENCE.sub(" ", text)
+    text = NAMES.sub(" ", text)
     text = CITATION.sub(" ", text)
     found = []
     for m in NUMBER.finditer(text):
@@ -149,3 +151,23 @@ def test_the_generated_pdf_contains_every_figure():
         pytest.skip("no generated paper here (run make reproduce)")
     placed = re.findall(r"\]\(([^()\s]+\.png)\)", md.read_text())  # captions may hold brackets themselves
     assert placed and pdf_image_count(pdf) == len(placed)
+
+
+MAIN_TEXT_PAGES = 15  # issue 23: at most 15 pages of main text, the rest in the appendix of the same PDF
+
+
+def test_the_generated_main_text_fits_its_page_budget():
+    """After `make reproduce`: Appendix A, the first page after the main text, starts on page 16 at the latest."""
+    from pypdf import PdfReader
+
+    from crfmap import paths
+
+    pdf = paths.GENERATED / "paper.pdf"
+    if not pdf.exists():
+        pytest.skip("no generated paper here (run make reproduce)")
+    assert "## Appendix A" in TEMPLATE.read_text()
+    pages = PdfReader(str(pdf)).pages
+    first = next((i for i, page in enumerate(pages)
+                  if re.search(r"^\s*Appendix A:", page.extract_text() or "", re.M)), None)
+    assert first is not None, "no page of paper.pdf starts Appendix A"
+    assert first <= MAIN_TEXT_PAGES, f"the main text takes {first} pages (at most {MAIN_TEXT_PAGES})"

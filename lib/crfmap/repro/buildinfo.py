@@ -29,6 +29,8 @@ from crfmap.repro.timings import slowest_cells_table
 DATA_ORIGINS = {
     "carmen/intel-corrected.log.gz": "https://github.com/acschaefer/ple (data/carmen/; Radish)",
     "carmen/aces-corrected.log.gz": "https://github.com/acschaefer/ple (data/carmen/; Radish)",
+    "carmen/csail-corrected.log.gz": "https://github.com/acschaefer/ple (data/carmen/; Radish)",
+    "carmen/freiburg-101-corrected.log.gz": "https://github.com/acschaefer/ple (data/carmen/; Radish)",
     "rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2": "https://github.com/comprobo24/robot_localization (bags/)",
     "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml": "https://github.com/comprobo24/robot_localization (bags/)",
     "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.pgm": "https://github.com/comprobo24/robot_localization (bags/)",

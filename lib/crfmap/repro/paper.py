@@ -50,17 +50,46 @@ def _check(path: Path, strict: bool) -> None:
         raise InputError(path, why.split(": ", 1)[1])
 
 
+# The short method and recording labels of the "beyond the thesis" results, and their names in the report.
+METHOD_NAMES = {
+    "raw": "raw grid", "logodds": "log-odds grid", "mean3x3": "3x3 mean", "median3x3": "3x3 median",
+    "closing3x3": "3x3 closing", "thesis": "thesis tables", "graphcut": "graph cut", "certainty": "certainty preset",
+    "best-table": "oracle table", "table-from-training": "Intel's table", "certainty-MAP": "certainty preset, MAP",
+    "certainty-T": "certainty preset, temperature", "hilbert": "Bayesian Hilbert map", "octomap": "OctoMap",
+    "intel": "Intel", "aces": "ACES", "ros2": "ROS 2 bag", "ros1": "ROS 1 bag", "csail": "MIT CSAIL",
+    "fr101": "Freiburg 101",
+}
+
+
 def _format_value(value, fmt=None) -> str:
     """A generated value as prose: ``fmt`` for numbers, lists as "a, b" ("none" when empty), None as "n/a".
 
+    A list's labels are printed under their names in the report (:data:`METHOD_NAMES`).
+
     >>> _format_value(0.12345, ".3f"), _format_value(["best-table", "thesis"]), _format_value([])
-    ('0.123', 'best-table, thesis', 'none')
+    ('0.123', 'oracle table, thesis tables', 'none')
     """
     if value is None:
         return "n/a"
     if isinstance(value, list):
-        return ", ".join(_format_value(v, fmt) for v in value) if value else "none"
+        return ", ".join(METHOD_NAMES.get(v, v) if isinstance(v, str) else _format_value(v, fmt)
+                         for v in value) if value else "none"
     return format(value, fmt) if fmt else str(value)
+
+
+def method_names(table_text: str) -> str:
+    """A "beyond the thesis" table with its method and recording labels (whole cells) under their report names.
+
+    >>> method_names("| recording | method |\\n|---|---|\\n| intel | best-table |")
+    '| recording | method |\\n|---|---|\\n| Intel | oracle table |'
+    """
+    def row(line):
+        if not line.startswith("|"):
+            return line
+        cells = line.split("|")
+        return "|".join(f" {METHOD_NAMES[c.strip()]} " if c.strip() in METHOD_NAMES else c for c in cells)
+
+    return "\n".join(row(line) for line in table_text.split("\n"))
 
 
 def attach_caption(table_text: str) -> str:
@@ -81,6 +110,51 @@ def attach_caption(table_text: str) -> str:
     rest = [line for line in lines[first_row:] if not line.startswith("|")]
     text = "\n".join(body) + f"\n\nTable: {caption}"
     return text + ("\n\n" + "\n".join(rest).strip() if any(r.strip() for r in rest) else "")
+
+
+# Code names that generated tables carry (notebook labels, parameter names), and the plain words the report
+# prints instead: a reader of the PDF should not need the library's identifiers. Longer names first.
+PLAIN_WORDS = (
+    ("crfmap.assess.learning.learn_thesis, ", ""),
+    ("LBP crfmap.crf.inference.reference.reference_lbp", "LBP (crfmap's reference implementation)"),
+    ("reference_lbp", "reference LBP"),
+    ("learn_pseudolikelihood", "pseudo-likelihood learner"),
+    ("learn_gradient", "gradient learner"),
+    ("learn_thesis", "thesis learner"),
+    ("schedule 'thesis', max_iter=1", "the thesis's schedule, one iteration"),
+    ("the 'thesis' schedule", "the thesis's schedule"),
+    ("p_hit = ", "P(hit) = "),
+    ("p_miss = ", "P(miss) = "),
+    ("logodds_limit = ", "log-odds limit = "),
+    ("occupied_first", "occupied, first hit"),
+    ("occupied_further", "occupied, further hits"),
+    ("free_first", "free, first pass"),
+    ("free_further", "free, further passes"),
+    ("equal to build_grid cell for cell", "equal to the offline grid builder's, cell for cell"),
+    ("noisy_image sigma", "noisy image, sigma"),
+    ("(crfmap.bench.goals; ", "("),
+    (", crfmap.crf.inference.lbp.message", ", by crfmap's message function"),
+    # the report's words for the tables' jargon (the glossary at the report's start)
+    (" with the thesis's pairing (receiver) and the proper pairwise one (oriented)",
+     " with the thesis's pairing and the proper pairwise one"),
+    ("(receiver pairing)", "(thesis pairing)"),
+    ("(oriented pairing)", "(pairwise pairing)"),
+    (", oriented pairing", ", pairwise pairing"),
+    ("search+gradient", "coarse search, then gradient"),
+    ("(search + gradient, extra)", "(coarse search, then gradient; extra)"),
+    ("(near known)", "(near observations)"),
+)
+
+
+def plain_words(text: str) -> str:
+    """A generated table with the library's code names replaced by the words the report uses.
+
+    >>> plain_words("| After LBP (learn_thesis, converged) | 0.02 |")
+    '| After LBP (thesis learner, converged) | 0.02 |'
+    """
+    for code, words in PLAIN_WORDS:
+        text = text.replace(code, words)
+    return text
 
 
 _GOAL = re.compile(r"^\s*(>=|<=)\s*([0-9.eE+-]+)")
@@ -158,7 +232,8 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
                 missing.append(f"table {name}")
                 return f"*(table {name} not generated)*"
             _check(f, strict)
-            return attach_caption(provenance.strip(f.read_text()))
+            text = plain_words(provenance.strip(f.read_text()))
+            return attach_caption(method_names(text) if name.startswith("beyond") else text)
         if kind == "figure":
             f = paths.FIGURES / f"{name}.png"
             if not f.exists():

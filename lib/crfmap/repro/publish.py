@@ -37,11 +37,23 @@ TYPST_HEADER = """\
 #set par(justify: true)
 #set figure(numbering: none)
 #show figure.caption: set text(size: 8.5pt)
-// Images float to the top or bottom of a page instead of leaving the rest of a page blank; tables stay in the
-// text's order, their caption above them and kept with them, and may continue on the next page.
+// Images float to the top or bottom of a page instead of leaving the rest of a page blank, but not past the
+// next section's heading (pending floats are placed first). Tables stay in the text's order with their caption
+// above them and stuck to their first rows (a caption never ends a page alone). A table of up to 25 rows is
+// kept whole; a longer one continues on the next page, its header repeated.
 #show figure.where(kind: image): set figure(placement: auto)
+#show heading.where(level: 2): it => { place.flush(); it }
 #show figure.where(kind: table): set figure.caption(position: top)
 #show figure.where(kind: table): set block(breakable: true)
+#show figure.caption.where(kind: table): it => block(sticky: true, width: 100%, it)
+#show figure.where(kind: table): it => {
+  let t = it.body.at("body", default: none)
+  let rows = if t != none and t.func() == table {
+    let columns = if type(t.columns) == array { t.columns.len() } else { t.columns }
+    t.children.len() / calc.max(columns, 1)
+  } else { 0 }
+  if rows > 25 { it } else { block(breakable: false, it) }
+}
 #show table: set text(size: 6.5pt)
 #show table.cell: set par(justify: false)
 #set table(inset: 3pt)
