@@ -32,6 +32,7 @@ from pathlib import Path
 import sys
 
 from crfmap import paths
+from crfmap.crf.model.presets import DEFAULT_PRESET
 from crfmap.errors import InputError
 from crfmap.io.atomic import atomic_path
 from crfmap.repro import provenance
@@ -53,9 +54,11 @@ def _check(path: Path, strict: bool) -> None:
 # The short method and recording labels of the "beyond the thesis" results, and their names in the report.
 METHOD_NAMES = {
     "raw": "raw grid", "logodds": "log-odds grid", "mean3x3": "3x3 mean", "median3x3": "3x3 median",
-    "closing3x3": "3x3 closing", "thesis": "thesis tables", "graphcut": "graph cut", "certainty": "certainty preset",
-    "best-table": "oracle table", "table-from-training": "Intel's table", "certainty-MAP": "certainty preset, MAP",
-    "certainty-T": "certainty preset, temperature", "hilbert": "Bayesian Hilbert map", "octomap": "OctoMap",
+    "closing3x3": "3x3 closing", "thesis": "thesis tables", "graphcut": "graph cut",
+    DEFAULT_PRESET: f"{DEFAULT_PRESET} preset", f"{DEFAULT_PRESET}-MAP": f"{DEFAULT_PRESET} preset, MAP",
+    f"{DEFAULT_PRESET}-T": f"{DEFAULT_PRESET} preset, temperature",
+    "best-table": "oracle table", "table-from-training": "Intel's table",
+    "hilbert": "Bayesian Hilbert map", "octomap": "OctoMap",
     "intel": "Intel", "aces": "ACES", "ros2": "ROS 2 bag", "ros1": "ROS 1 bag", "csail": "MIT CSAIL",
     "fr101": "Freiburg 101",
 }
