@@ -166,11 +166,17 @@ class _Scorer:
     resample in a compiled loop.
     """
 
-    def __init__(self, p, y, inverse, n_blocks, auc=True):
-        q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
-        per_cell = np.stack([np.ones_like(p), (p - y) ** 2, -(y * np.log(q) + (1 - y) * np.log(1 - q)),
-                             y, y * (p > 0.5)])
-        self.sums = np.stack([np.bincount(inverse, weights=row, minlength=n_blocks) for row in per_cell])
+    def __init__(self, p, y, inverse, n_blocks, auc=True, logloss=True, counts=None):
+        """``logloss=False``: its sums stay 0 (not asked for); ``counts``: the (cells, walls) sums per block,
+        which do not depend on ``p`` (:func:`_layout` keeps them per group)."""
+        cells, walls = counts if counts is not None else _block_counts(y, inverse, n_blocks)
+        if logloss:
+            q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
+            loss = np.bincount(inverse, weights=-(y * np.log(q) + (1 - y) * np.log(1 - q)), minlength=n_blocks)
+        else:
+            loss = np.zeros(n_blocks)
+        self.sums = np.stack([cells, np.bincount(inverse, weights=(p - y) ** 2, minlength=n_blocks), loss, walls,
+                              np.bincount(inverse, weights=y * (p > 0.5), minlength=n_blocks)])
         self.with_auc = auc
         if auc:
             order = np.argsort(p, kind="stable")
@@ -251,8 +257,15 @@ def _block_ids(shape, block):
     return (yy // block) * nbx + xx // block
 
 
+def _block_counts(y, inverse, n_blocks):
+    """(cells, walls) per block: the sums of :class:`_Scorer` that do not depend on the prediction."""
+    return (np.bincount(inverse, weights=np.ones(len(y)), minlength=n_blocks),
+            np.bincount(inverse, weights=y, minlength=n_blocks))
+
+
 def _layout(split, block) -> dict:
-    """{group: (mask, labels, block ids, each cell's block index)} of ``split`` scored in ``block``-cell squares.
+    """{group: (mask, labels, block ids, each cell's block index, (cells, walls) per block)} of ``split`` scored
+    in ``block``-cell squares.
 
     The last one is kept on the split with the four count arrays it was made from (the same objects, and
     ``block``, or it is made again): scoring many predictions on one split one :func:`score` call at a time
@@ -268,7 +281,7 @@ def _layout(split, block) -> dict:
     for group in GROUPS:
         mask = split.group(group)
         uniq, inverse = np.unique(blocks[mask], return_inverse=True)
-        layout[group] = (mask, labels[mask], uniq, inverse)
+        layout[group] = (mask, labels[mask], uniq, inverse, _block_counts(labels[mask], inverse, len(uniq)))
     split.__dict__["_layout"] = (counts, int(block), layout)  # one at a time: a split is scored in one block size
     return layout
 
@@ -322,14 +335,15 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
     alpha = (1 - level) / 2
     out = {name: {} for name in probs}
     for group in GROUPS:  # every group draws its resamples, asked for or not: the same seed gives the same intervals
-        mask, y, uniq, inverse = layout[group]
+        mask, y, uniq, inverse, counts = layout[group]
         # resample blocks: a block's weight is how often it was drawn
         draws = _draws(rng, len(uniq), n_boot) if len(uniq) else None
         if group not in groups:
             continue
         boot = {}
         for name, p in probs.items():
-            scorer = _Scorer(p[mask], y, inverse, len(uniq), auc="auc" in metrics)
+            scorer = _Scorer(p[mask], y, inverse, len(uniq), auc="auc" in metrics, logloss="logloss" in metrics,
+                             counts=counts)
             values = scorer.metrics()
             out[name][group] = dict({m: values[m] for m in metrics}, cells=int(mask.sum()), walls=int(y.sum()))
             boot[name] = scorer.resampled(draws) if draws is not None and n_boot else {}
