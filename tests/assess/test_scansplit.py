@@ -110,3 +110,54 @@ def test_bad_input_is_named():
         score(sp, {"p": np.full((2, 2), 2.0)})
     with pytest.raises(InputError, match="non-negative"):
         ScanSplit(*(np.full((2, 2), -1) for _ in range(4)))
+
+
+def _auc_one_resample_at_a_time(y, inverse, starts, draws):
+    """The all-resamples AUC loop as it was before it went over every resample at once (its summation order)."""
+    out = np.empty(len(draws))
+    for k, w in enumerate(draws):
+        total = neg_below = n_pos = n_neg = 0.0
+        for r, start in enumerate(starts):
+            end = starts[r + 1] if r + 1 < len(starts) else len(y)
+            pos_g = neg_g = 0.0
+            for i in range(start, end):
+                pos_g += w[inverse[i]] * y[i]
+                neg_g += w[inverse[i]] * (1.0 - y[i])
+            total += pos_g * (neg_below + 0.5 * neg_g)
+            neg_below += neg_g
+            n_pos += pos_g
+            n_neg += neg_g
+        out[k] = total / (n_pos * n_neg) if n_pos > 0 and n_neg > 0 else np.nan
+    return out
+
+
+def test_the_resampled_auc_is_bit_for_bit_the_one_resample_at_a_time_sum():
+    from crfmap.assess.scansplit import _auc_resampled
+
+    rng = np.random.default_rng(8)
+    n, n_blocks = 400, 17
+    for p in (np.round(rng.uniform(0, 1, n), 1), rng.uniform(0, 1, n)):  # many ties, then none
+        order = np.argsort(p, kind="stable")
+        y = (rng.uniform(0, 1, n) < p)[order].astype(float)
+        inverse = rng.integers(0, n_blocks, n)[order]
+        starts = np.concatenate([[0], np.flatnonzero(np.diff(p[order])) + 1]).astype(np.int64)
+        draws = np.array([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks) for _ in range(25)],
+                         dtype=float)
+        np.testing.assert_array_equal(_auc_resampled(y, inverse, starts, draws),
+                                      _auc_one_resample_at_a_time(y, inverse, starts, draws))
+    only_walls = np.ones(5)
+    assert np.isnan(_auc_resampled(only_walls, np.zeros(5, np.int64), np.array([0], np.int64), np.ones((2, 1)))).all()
+
+
+def test_a_split_scored_again_gives_the_same_numbers_and_notices_new_counts():
+    """score() keeps the split's cells and blocks between calls: the same result as a fresh split, per block size."""
+    rng = np.random.default_rng(9)
+    counts = [rng.integers(0, 3, (30, 30)) for _ in range(4)]
+    sp = ScanSplit(*counts)
+    preds = {"raw": sp.raw_probability(), "half": np.full((30, 30), 0.5)}
+    for block in (8, 8, 5, 8):
+        again = score(sp, preds, n_boot=10, block=block, seed=2, reference="raw")
+        assert repr(again) == repr(score(ScanSplit(*counts), preds, n_boot=10, block=block, seed=2, reference="raw"))
+    sp.second_hits = counts[0] * 2  # new counts: new labels and groups (repr: NaN equals NaN)
+    assert repr(score(sp, preds, n_boot=0)) == repr(score(ScanSplit(counts[0], counts[1], counts[0] * 2, counts[3]),
+                                                          preds, n_boot=0))

@@ -220,3 +220,23 @@ def test_only_runs_the_groups_asked_for_and_names_a_wrong_one(capsys):
     assert main(["bench", "--only", "node", "nope"]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "--only" in err and "nope" in err
+
+
+def test_the_peers_and_node_rows_can_be_left_out(monkeypatch):
+    """Notebook 09's reproduction leaves out rows no table of it shows; `crfmap bench` keeps them."""
+    from crfmap.bench import node, online, peers
+
+    monkeypatch.setattr(online, "bench_online", lambda **kw: [{"method": "online-stub"}])
+    monkeypatch.setattr(peers, "bench_peers", lambda **kw: [{"method": "peers-stub"}])
+    monkeypatch.setattr(node, "bench_node_refine", lambda **kw: [{"method": "node-refine-stub"}])
+    monkeypatch.setattr(node, "bench_node_map", lambda **kw: [{"method": "node-map-stub"}])
+
+    def methods(**flags):
+        return {r["method"] for r in bench.run(sizes=(64,), quick=True, repeats=1, threads=(1,), progress=False,
+                                               memory=False, external=False, goals=False, cold=False, **flags)}
+
+    every = methods()
+    assert {"online-stub", "peers-stub", "node-refine-stub", "node-map-stub", "crfmap-fast"} <= every
+    fewer = methods(peers=False, node=False)
+    assert "online-stub" in fewer and not {"peers-stub", "node-refine-stub", "node-map-stub"} & fewer
+    assert every - fewer == {"peers-stub", "node-refine-stub", "node-map-stub"}

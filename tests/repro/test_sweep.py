@@ -128,8 +128,11 @@ def test_reproduce_says_points_and_time_then_passes_the_sweep_to_snakemake(tmp_p
     monkeypatch.setattr(reproduce.subprocess, "call", lambda command, env: commands.append(command) or 0)
     assert reproduce.main(["--sweep", str(folder / "toy.yaml"), "--max-points", "300", "--dry-run"]) == 0
     err = capsys.readouterr().err.splitlines()
-    seconds = 19 * 3  # 6 points of a 19 s notebook, 2 at a time (the table: no full run under this output root)
-    assert err[0] == f"reproduce: sweep toy: 6 points of 04_denoising.ipynb, about {seconds} s on 2 cores (19 s per " \
+    from crfmap.repro.timings import EXPECTED_SECONDS, describe
+
+    each = EXPECTED_SECONDS["04_denoising"]  # the table: no full run under this output root
+    total = describe(each * 3)  # 6 points, 2 at a time
+    assert err[0] == f"reproduce: sweep toy: 6 points of 04_denoising.ipynb, about {total} on 2 cores ({each} s per " \
                      "point at full settings)"
     (command,) = commands
     assert "out/runs/toy/collected.csv" in command

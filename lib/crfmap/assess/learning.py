@@ -251,13 +251,25 @@ def pseudolikelihood(observed, truth, hidden, link, mask=None):
     Returns (value, gradient of shape (8,)).
     """
     obs, tru = check_pair(observed, truth)
-    H = check_table(hidden, "hidden")
-    L = check_table(link, "link")
+    return _pl_value_grad(_pl_terms(obs, tru, mask), check_table(hidden, "hidden"), check_table(link, "link"))
+
+
+def _pl_terms(obs, tru, mask):
+    """What :func:`pseudolikelihood` needs of the grids alone (the same at every step of a fit)."""
     x = tru > 0.5
     n_occ, n_emp = _neighbour_counts(x)
     keep = np.ones_like(x) if mask is None else np.asarray(mask, bool)
     o = obs[keep]
     n_occ, n_emp, xk = n_occ[keep], n_emp[keep], x[keep]
+    state = np.where(xk, 0, 1)  # index 0 = occupied
+    onehot = np.stack([state == 0, state == 1]).astype(float)
+    return {"o": o, "n_occ": n_occ, "n_emp": n_emp, "state": state, "cells": np.arange(state.size), "onehot": onehot,
+            "pb": np.stack([o, 1 - o])}
+
+
+def _pl_value_grad(terms, H, L):
+    """:func:`pseudolikelihood`'s (value, gradient) from :func:`_pl_terms` and checked tables."""
+    o, n_occ, n_emp, state = terms["o"], terms["n_occ"], terms["n_emp"], terms["state"]
     logH = np.log(np.maximum(H, 1e-300))
     phi = np.stack([L[0, 0] * o + L[0, 1] * (1 - o), L[1, 0] * o + L[1, 1] * (1 - o)])  # (2, n)
     # log score of each state c: log phi(c) + n_occ * log H[c, occ] + n_emp * log H[c, emp]
@@ -265,17 +277,15 @@ def pseudolikelihood(observed, truth, hidden, link, mask=None):
     smax = s.max(axis=0)
     logz = smax + np.log(np.exp(s[0] - smax) + np.exp(s[1] - smax))
     post = np.exp(s - logz)  # (2, n) model conditional
-    state = np.where(xk, 0, 1)  # index 0 = occupied
-    value = np.mean(s[state, np.arange(s.shape[1])] - logz)
-    onehot = np.stack([state == 0, state == 1]).astype(float)
-    resid = onehot - post  # d value / d s(c), per cell
+    value = np.mean(s[state, terms["cells"]] - logz)
+    resid = terms["onehot"] - post  # d value / d s(c), per cell
     grad = np.zeros(8)
     # d s(c) / d log H[a, b] = [c == a] * count(b)
     for a in range(2):
         grad[2 * a + 0] = np.mean(resid[a] * n_occ)
         grad[2 * a + 1] = np.mean(resid[a] * n_emp)
     # d s(c) / d log L[a, b] = [c == a] * L[a, b] * p_b / phi(c), p_0 = o (occupied), p_1 = 1 - o
-    pb = np.stack([o, 1 - o])
+    pb = terms["pb"]
     for a in range(2):
         for b in range(2):
             grad[4 + 2 * a + b] = np.mean(resid[a] * L[a, b] * pb[b] / np.maximum(phi[a], 1e-300))
@@ -318,8 +328,10 @@ def learn_pseudolikelihood(
     last = -np.inf
     from tqdm.auto import tqdm
 
+    terms = _pl_terms(obs, tru, mask)  # the grids' part, once: each step only changes the tables
     for t in tqdm(range(1, steps + 1), desc="learning (pseudo-likelihood)", disable=not progress, leave=False):
-        value, grad = pseudolikelihood(obs, tru, *_tables(theta), mask)
+        H, L = _tables(theta)
+        value, grad = _pl_value_grad(terms, check_table(H, "hidden"), check_table(L, "link"))
         trace.append({"step": t - 1, "objective": value})
         if abs(value - last) < tol:
             break

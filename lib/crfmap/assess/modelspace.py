@@ -37,10 +37,14 @@ def table_refine(split, coupling, link_strength, margin=None, max_iter=1000, tol
     ``tol`` and ``dtype`` go to :func:`crfmap.crf.inference.lbp.infer` (float32 moves half the bytes; its
     beliefs differ from float64's by about 1e-6).
     """
+    return _refine(split.raw_probability(), _near(split, margin), coupling, link_strength, max_iter=max_iter, tol=tol,
+                   dtype=dtype)
+
+
+def _refine(raw, region, coupling, link_strength, max_iter=1000, tol=1e-5, dtype=np.float64):
+    """:func:`table_refine` given the split's raw grid and LBP region (the same for every table of a diagram)."""
     from crfmap.crf.inference.lbp import infer
 
-    raw = split.raw_probability()
-    region = _near(split, margin)
     result = infer(raw, coupling_table(coupling), coupling_table(link_strength), region=region, max_iter=max_iter,
                    tol=tol, dtype=dtype)
     return np.where(region, result.beliefs.probability, raw), result
@@ -60,8 +64,9 @@ def symmetric_tables(split, couplings, link_strengths, margin=None, group="all",
     keep = {(float(j), float(k)) for j, k in keep}
     kept, best_beliefs = {}, (np.inf, None, None)
     pairs = [(i, j) for i in range(shape[0]) for j in range(shape[1])]
+    raw, region = split.raw_probability(), _near(split, margin)
     for i, j in tqdm(pairs, desc="phase diagram", disable=not progress, leave=False):
-        beliefs, result = table_refine(split, couplings[i], link_strengths[j], margin, **options)
+        beliefs, result = _refine(raw, region, couplings[i], link_strengths[j], **options)
         s = score(split, {"p": beliefs}, n_boot=0, groups=(group,), metrics=("brier", "wall_recall"))["p"][group]
         out["brier"][i, j], out["wall_recall"][i, j] = s["brier"], s["wall_recall"]
         out["converged"][i, j], out["iterations"][i, j] = result.converged, result.iterations

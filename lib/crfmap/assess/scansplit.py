@@ -166,11 +166,17 @@ class _Scorer:
     resample in a compiled loop.
     """
 
-    def __init__(self, p, y, inverse, n_blocks, auc=True):
-        q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
-        per_cell = np.stack([np.ones_like(p), (p - y) ** 2, -(y * np.log(q) + (1 - y) * np.log(1 - q)),
-                             y, y * (p > 0.5)])
-        self.sums = np.stack([np.bincount(inverse, weights=row, minlength=n_blocks) for row in per_cell])
+    def __init__(self, p, y, inverse, n_blocks, auc=True, logloss=True, counts=None):
+        """``logloss=False``: its sums stay 0 (not asked for); ``counts``: the (cells, walls) sums per block,
+        which do not depend on ``p`` (:func:`_layout` keeps them per group)."""
+        cells, walls = counts if counts is not None else _block_counts(y, inverse, n_blocks)
+        if logloss:
+            q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
+            loss = np.bincount(inverse, weights=-(y * np.log(q) + (1 - y) * np.log(1 - q)), minlength=n_blocks)
+        else:
+            loss = np.zeros(n_blocks)
+        self.sums = np.stack([cells, np.bincount(inverse, weights=(p - y) ** 2, minlength=n_blocks), loss, walls,
+                              np.bincount(inverse, weights=y * (p > 0.5), minlength=n_blocks)])
         self.with_auc = auc
         if auc:
             order = np.argsort(p, kind="stable")
@@ -213,24 +219,35 @@ class _Scorer:
 
 @njit(cache=True)
 def _auc_resampled(y, inverse, starts, draws):  # pragma: no cover - compiled; tested against _Scorer._auc
-    """:meth:`_Scorer._auc` for every row of block weights ``draws``, cells sorted by P."""
+    """:meth:`_Scorer._auc` for every row of block weights ``draws``, cells sorted by P.
+
+    Every resample at once: each cell's weights are one row of the transposed ``draws``, and each
+    resample's sums are added in the same order as one resample at a time (the same numbers, bit for
+    bit), but the resamples are independent, so the loop over them is not one long chain of additions.
+    """
     n_boot, n, n_runs = draws.shape[0], y.size, starts.size
+    weights = np.ascontiguousarray(draws.T)  # [block, resample]
+    total, neg_below = np.zeros(n_boot), np.zeros(n_boot)
+    n_pos, n_neg = np.zeros(n_boot), np.zeros(n_boot)
+    pos_g, neg_g = np.empty(n_boot), np.empty(n_boot)
+    for r in range(n_runs):
+        end = starts[r + 1] if r + 1 < n_runs else n
+        pos_g[:] = 0.0
+        neg_g[:] = 0.0
+        for i in range(starts[r], end):
+            yi, ni = y[i], 1.0 - y[i]
+            w = weights[inverse[i]]
+            for k in range(n_boot):
+                pos_g[k] += w[k] * yi
+                neg_g[k] += w[k] * ni
+        for k in range(n_boot):
+            total[k] += pos_g[k] * (neg_below[k] + 0.5 * neg_g[k])
+            neg_below[k] += neg_g[k]
+            n_pos[k] += pos_g[k]
+            n_neg[k] += neg_g[k]
     out = np.empty(n_boot)
     for k in range(n_boot):
-        w = draws[k]
-        total = neg_below = n_pos = n_neg = 0.0
-        for r in range(n_runs):
-            end = starts[r + 1] if r + 1 < n_runs else n
-            pos_g = neg_g = 0.0
-            for i in range(starts[r], end):
-                wi = w[inverse[i]]
-                pos_g += wi * y[i]
-                neg_g += wi * (1.0 - y[i])
-            total += pos_g * (neg_below + 0.5 * neg_g)
-            neg_below += neg_g
-            n_pos += pos_g
-            n_neg += neg_g
-        out[k] = total / (n_pos * n_neg) if n_pos > 0 and n_neg > 0 else np.nan
+        out[k] = total[k] / (n_pos[k] * n_neg[k]) if n_pos[k] > 0 and n_neg[k] > 0 else np.nan
     return out
 
 
@@ -238,6 +255,41 @@ def _block_ids(shape, block):
     yy, xx = np.indices(shape)
     nbx = -(-shape[1] // block)
     return (yy // block) * nbx + xx // block
+
+
+def _block_counts(y, inverse, n_blocks):
+    """(cells, walls) per block: the sums of :class:`_Scorer` that do not depend on the prediction."""
+    return (np.bincount(inverse, weights=np.ones(len(y)), minlength=n_blocks),
+            np.bincount(inverse, weights=y, minlength=n_blocks))
+
+
+def _layout(split, block) -> dict:
+    """{group: (mask, labels, block ids, each cell's block index, (cells, walls) per block)} of ``split`` scored
+    in ``block``-cell squares.
+
+    The last one is kept on the split with the four count arrays it was made from (the same objects, and
+    ``block``, or it is made again): scoring many predictions on one split one :func:`score` call at a time
+    (a phase diagram, a search) finds the cells and blocks once.
+    """
+    counts = (split.first_hits, split.first_passes, split.second_hits, split.second_passes)
+    kept = split.__dict__.get("_layout")  # (the count arrays it was made from, block, layout)
+    if kept is not None and kept[1] == block and all(a is b for a, b in zip(kept[0], counts)):
+        return kept[2]
+    labels = split.labels().astype(np.float64)
+    blocks = _block_ids(split.shape, block)
+    layout = {}
+    for group in GROUPS:
+        mask = split.group(group)
+        uniq, inverse = np.unique(blocks[mask], return_inverse=True)
+        layout[group] = (mask, labels[mask], uniq, inverse, _block_counts(labels[mask], inverse, len(uniq)))
+    split.__dict__["_layout"] = (counts, int(block), layout)  # one at a time: a split is scored in one block size
+    return layout
+
+
+def _draws(rng, n_blocks, n_boot):
+    """[n_boot, n_blocks] block weights: how often each block was drawn in each resample (advances ``rng``)."""
+    return np.array([np.bincount(rng.integers(0, n_blocks, n_blocks), minlength=n_blocks)
+                     for _ in range(n_boot)], dtype=np.float64).reshape(-1, n_blocks)
 
 
 def _values(pred, shape, name):
@@ -278,24 +330,20 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
         raise InputError("groups/metrics", f"must be non-empty subsets of {GROUPS} and {METRICS}, "
                          f"got {unknown or 'none'}")
     probs = {name: _values(p, split.shape, name) for name, p in predictions.items()}
-    labels = split.labels().astype(np.float64)
-    blocks = _block_ids(split.shape, block)
+    layout = _layout(split, block)
     rng = np.random.default_rng(seed)
     alpha = (1 - level) / 2
     out = {name: {} for name in probs}
     for group in GROUPS:  # every group draws its resamples, asked for or not: the same seed gives the same intervals
-        mask = split.group(group)
-        y = labels[mask]
-        ids = blocks[mask]
-        uniq, inverse = np.unique(ids, return_inverse=True)
+        mask, y, uniq, inverse, counts = layout[group]
         # resample blocks: a block's weight is how often it was drawn
-        draws = np.array([np.bincount(rng.integers(0, len(uniq), len(uniq)), minlength=len(uniq))
-                          for _ in range(n_boot)], dtype=np.float64).reshape(-1, len(uniq)) if len(uniq) else None
+        draws = _draws(rng, len(uniq), n_boot) if len(uniq) else None
         if group not in groups:
             continue
         boot = {}
         for name, p in probs.items():
-            scorer = _Scorer(p[mask], y, inverse, len(uniq), auc="auc" in metrics)
+            scorer = _Scorer(p[mask], y, inverse, len(uniq), auc="auc" in metrics, logloss="logloss" in metrics,
+                             counts=counts)
             values = scorer.metrics()
             out[name][group] = dict({m: values[m] for m in metrics}, cells=int(mask.sum()), walls=int(y.sum()))
             boot[name] = scorer.resampled(draws) if draws is not None and n_boot else {}

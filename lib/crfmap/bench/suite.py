@@ -253,7 +253,8 @@ def _all_tasks(tasks, quick, sizes, converge_sizes):
 
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
         external=True, goals=True, work=None, cold=None, external_max_size=EXTERNAL_MAX_SIZE, explorer_changes=None,
-        converge_runs=2, online_tol=None, bandwidth_mbytes=None, only=None, preset_maps=None):
+        converge_runs=2, online_tol=None, bandwidth_mbytes=None, only=None, peers=True, node=True,
+        preset_maps=None):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI).
 
     The reproduction's lighter settings (notebook 09 says which it used): ``work`` cell updates
@@ -263,7 +264,9 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     changes timed (default 36, quick 6) and ``converge_runs`` the timed runs per convergence
     measurement (the best is kept; a smaller warm-up run loads the kernels first); ``online_tol``
     the tolerance of the online run's final map against the offline one (default 1e-7);
-    ``bandwidth_mbytes`` the size of each array of the bandwidth triad (default 256, quick 64).
+    ``bandwidth_mbytes`` the size of each array of the bandwidth triad (default 256, quick 64);
+    ``peers=False`` leaves out the published peers' rows (``peers-*``, with the online rows) and
+    ``node=False`` the ROS node's (``node-*``), which no table of notebook 09 shows.
     ``preset_maps``: the maps of the default preset's convergence rows (default: the Intel and ACES logs
     and a 4096² office; quick: a 256² office; see :data:`crfmap.bench.goals.PRESET_MAPS`).
     ``only``: run just these groups of rows (:data:`GROUPS`, e.g. ``("node",)``), else every one the flags allow.
@@ -282,7 +285,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     if memory:
         tasks.append(("memory", 1024 if quick else max(sizes)))
     if online:
-        tasks += [("online", None), ("node", None)]
+        tasks += [("online", None)] + ([("node", None)] if node else [])
     if external:
         tasks.append(("external", None))
     from crfmap.bench import goals as G
@@ -345,7 +348,8 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             from crfmap.bench.peers import bench_peers
 
             yield from bench_online(quick=quick, final_tol=online_tol)
-            yield from bench_peers(quick=quick)
+            if peers:
+                yield from bench_peers(quick=quick)
         elif kind == "node":
             from crfmap.bench.node import bench_node_map, bench_node_refine
 

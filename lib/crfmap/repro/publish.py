@@ -17,6 +17,7 @@ files, and Typst uses the fonts inside its wheel: :data:`TYPST_OPTIONS`).
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
 from crfmap import paths
@@ -114,17 +115,24 @@ def publish(paper_md_path, pdf_path=None, html_path=None) -> tuple:
     pdf_path = Path(pdf_path or source.with_suffix(".pdf"))
     html_path = Path(html_path or source.with_suffix(".html"))
     typ_path = source.with_suffix(".typ")  # beside the Markdown, so relative image paths still hold
-    with atomic_path(typ_path) as tmp:
-        Path(tmp).write_text(to_typst(source))
-    root = Path(paths.OUTPUT_ROOT).resolve()
-    if root not in typ_path.resolve().parents:
-        root = typ_path.resolve().parent.parent.parent
-    with atomic_path(pdf_path) as tmp:
-        Path(tmp).write_bytes(typst.compile(str(typ_path), root=str(root), **TYPST_OPTIONS))
     css = source.parent / "paper.css"
     css.write_text(HTML_STYLE)
-    with atomic_path(html_path) as tmp:
-        Path(tmp).write_text(to_html(source, css))
-    css.unlink()
+    # pandoc makes the HTML page in its own process while Typst compiles the PDF here: the two overlap
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        html = pool.submit(to_html, source, css)
+        try:
+            with atomic_path(typ_path) as tmp:
+                Path(tmp).write_text(to_typst(source))
+            root = Path(paths.OUTPUT_ROOT).resolve()
+            if root not in typ_path.resolve().parents:
+                root = typ_path.resolve().parent.parent.parent
+            with atomic_path(pdf_path) as tmp:
+                Path(tmp).write_bytes(typst.compile(str(typ_path), root=str(root), **TYPST_OPTIONS))
+            with atomic_path(html_path) as tmp:
+                Path(tmp).write_text(html.result())
+        finally:
+            html.cancel()
+            wait([html])  # pandoc has finished reading the style sheet before it goes
+            css.unlink()
     _respect_umask(typ_path, pdf_path, html_path)
     return pdf_path, html_path
