@@ -132,7 +132,7 @@ def _auc_one_resample_at_a_time(y, inverse, starts, draws):
 
 
 def test_the_resampled_auc_is_bit_for_bit_the_one_resample_at_a_time_sum():
-    from crfmap.assess.scansplit import _auc_resampled
+    from crfmap.assess.block_bootstrap import _auc_resampled
 
     rng = np.random.default_rng(8)
     n, n_blocks = 400, 17

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from crfmap.assess import graph_cut as G
+from crfmap.assess import mincut as G
 from crfmap.bench import external as E
 from crfmap.errors import InputError
 from crfmap.crf.inference.exact import exact_marginals

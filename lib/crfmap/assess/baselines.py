@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.errors import InputError
-from crfmap.assess.graph_cut import graph_cut_map
+from crfmap.assess.mincut import graph_cut_map
 from crfmap.grid import UNKNOWN
 
 

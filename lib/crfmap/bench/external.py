@@ -39,7 +39,7 @@ import warnings
 
 import numpy as np
 
-from crfmap.assess.graph_cut import crf_energy, floored_unary, graph_cut_map
+from crfmap.assess.mincut import crf_energy, floored_unary, graph_cut_map
 from crfmap.bench.common import median_time, bench_grid, record
 from crfmap.crf.engine.messages import MESSAGE_FLOOR
 from crfmap.crf.inference.lbp import infer

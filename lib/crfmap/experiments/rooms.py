@@ -107,7 +107,7 @@ def baselines(scans, truth, observed) -> dict:
            "log-odds grid (no LBP)": padded_grid(scans, truth, model="logodds"),
            "3x3 neighbour mean": neighbour_mean3(observed)}
     if graph_cut_available():
-        from crfmap.assess.graph_cut import graph_cut_map
+        from crfmap.assess.mincut import graph_cut_map
 
         occupied, _ = graph_cut_map(observed.probability, DEFAULT_HIDDEN, DEFAULT_LINK)
         out["graph-cut MAP (default tables)"] = observed.with_probability(occupied.astype(float))

@@ -35,7 +35,7 @@ KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
 NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
-                 "assess/scansplit.py")
+                 "assess/scansplit.py", "assess/block_bootstrap.py")
 
 
 def cache_dir() -> Path | None:
