@@ -8,6 +8,7 @@ variable               read by                          accepted
 ``CRFMAP_DATA``        :func:`crfmap.paths.data_root`   a folder (missing files are named when needed)
 ``CRFMAP_MAX_CELLS``   :func:`crfmap.checks.max_cells`  a whole number >= 1 (``4e8`` too); no "no limit"
 ``CRFMAP_RUN``         :mod:`crfmap.repro.provenance`   a JSON object (set by :mod:`crfmap.repro.run`)
+``CRFMAP_REPRODUCE_STARTED`` :mod:`crfmap.repro.buildinfo` a Unix time (set by ``make reproduce`` for the paper)
 ``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number >= 1 (checked then)
 ``NUMBA_CACHE_DIR``    numba, :mod:`crfmap._numba_cache` a folder numba can write (existing or not)
 =====================  ===============================  ===========================================
@@ -187,6 +188,20 @@ def number(variable, what) -> int | None:
     return whole_number(variable, text, what) if text.strip() else None
 
 
+def reproduce_started() -> float | None:
+    """``$CRFMAP_REPRODUCE_STARTED``: when ``make reproduce`` started (Unix time), or None when unset or empty."""
+    text = os.environ.get("CRFMAP_REPRODUCE_STARTED", "")
+    if not text.strip():
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0:
+        raise InputError(_named("CRFMAP_REPRODUCE_STARTED", text), "expected a Unix time in seconds")
+    return value
+
+
 def check() -> None:
     """Check every variable an entry point depends on before it starts (InputError naming the first bad one).
 
@@ -198,6 +213,7 @@ def check() -> None:
     numba_cache_dir()
     number("CRFMAP_MAX_CELLS", "cells")
     run_context()
+    reproduce_started()
     folder("CRFMAP_ROOT", must_exist=True)
     folder("CRFMAP_OUTPUT_ROOT")
     folder("CRFMAP_DATA")

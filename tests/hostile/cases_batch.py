@@ -188,6 +188,8 @@ _env_case("CRFMAP_ROOT-empty", {"CRFMAP_ROOT": ""}, ["CRFMAP_ROOT"], entry="repr
 _env_case("CRFMAP_ROOT-missing", {"CRFMAP_ROOT": "{d}/no-checkout"}, ["CRFMAP_ROOT"], entry="reproduce",
           subprocess=True)
 _env_case("CRFMAP_RUN-not-json", {"CRFMAP_RUN": "{{notebook"}, ["CRFMAP_RUN"])
+_env_case("CRFMAP_REPRODUCE_STARTED-not-a-time", {"CRFMAP_REPRODUCE_STARTED": "yesterday"},
+          ["CRFMAP_REPRODUCE_STARTED"], entry="reproduce")
 _env_case("CRFMAP_RUN-path-escape", {"CRFMAP_RUN": '{{"notebook": "../../etc/passwd", "parameters": {{}}}}'},
           ["CRFMAP_RUN"], entry="reproduce")
 

@@ -18,10 +18,11 @@ import os
 import platform
 import re
 import subprocess
+import time
 from importlib import metadata
 from pathlib import Path
 
-from crfmap import paths
+from crfmap import environment, paths
 from crfmap.repro.report import markdown_table
 from crfmap.repro.timings import slowest_cells_table
 
@@ -143,7 +144,7 @@ def describe(data: bool = True) -> dict:
                                      [[name, kb, _grouped(digest)] for name, kb, digest, _ in data_files()]
                                      ).rstrip("\n") if data else "",
         "seeds": "; ".join(f"{notebook}: {seeds}" for notebook, seeds in notebook_seeds()),
-        "wall": wall_sentence(wall),
+        "wall": wall_sentence(wall, started=environment.reproduce_started()),
         "slowest_cells": slowest_cells_table(paths.OUT / "notebooks").rstrip("\n"),
     }
 
@@ -157,14 +158,22 @@ def _grouped(digest: str, size: int = 16) -> str:
     return " ".join(digest[i:i + size] for i in range(0, len(digest), size))
 
 
-def wall_sentence(wall: dict) -> str:
-    """The last full run's wall clock as a clause of the report, or that none was recorded.
+def wall_sentence(wall: dict, started: float | None = None) -> str:
+    """The last full run's wall clock as a clause of the report, or that none was recorded; with ``started``
+    (when the ``make reproduce`` building this report began, Unix time) first how long this run has taken.
+
+    >>> wall_sentence({}, started=time.time() - 90).startswith("this report was built 1.5 minutes after")
+    True
 
     >>> wall_sentence({"workflow_seconds": 600.0, "make_seconds": 660.0, "cores": 2, "finished": "2026-01-01 10:00:00 UTC"})
     'the last full run recorded here (finished 2026-01-01 10:00:00 UTC, 2 cores) took 11.0 minutes from `make reproduce` to the last output (the workflow alone 10.0 minutes)'
     >>> wall_sentence({})
     'no full run was recorded here before this build (out/logs/reproduce_wall.json is written when one ends)'
     """
+    if started is not None:  # this run, up to the paper's build (its full record is written when it ends)
+        this = (f"this report was built {(time.time() - started) / 60:.1f} minutes after `make reproduce` started "
+                "(venv, warm-up and every notebook)")
+        return this + "; " + wall_sentence(wall) if wall.get("workflow_seconds") else this
     if not wall.get("workflow_seconds"):
         return "no full run was recorded here before this build (out/logs/reproduce_wall.json is written when one ends)"
     total = wall.get("make_seconds")

@@ -166,7 +166,10 @@ def _reproduce(args) -> int:
     command = snakemake_command(targets, args.cores, directory, args.quick, args.dry_run, args.profile, extra,
                                 config)
     start = time.perf_counter()
-    code = subprocess.call(command, env={**os.environ, "MPLBACKEND": os.environ.get("MPLBACKEND", "Agg")})
+    env = {**os.environ, "MPLBACKEND": os.environ.get("MPLBACKEND", "Agg")}
+    if args.started_at is not None:  # the paper states how long this run took up to its build
+        env["CRFMAP_REPRODUCE_STARTED"] = repr(float(args.started_at))
+    code = subprocess.call(command, env=env)
     seconds = time.perf_counter() - start
     print(f"reproduce: {'dry run' if args.dry_run else 'workflow'} {'finished' if code == 0 else 'failed'} "
           f"in {seconds:.1f} s (outputs under {directory})", file=sys.stderr)
