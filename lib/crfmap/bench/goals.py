@@ -40,11 +40,12 @@ import subprocess
 import sys
 import tempfile
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from crfmap.bench.common import CONVERGE_TOL, bench_grid, record
+from crfmap.bench.common import CONVERGE_TOL, bench_grid, median_time, record
 
 INFER_GOAL = 0.8  # end-to-end / kernel per-iteration throughput
 START_GOAL = 2.0  # [s] first `crfmap infer` minus a warm one, caches warmed by make
@@ -224,6 +225,7 @@ def reproduce_record(path=None, wall_path=None) -> dict:
     workflow's own), otherwise the notebooks' summed run times.
     """
     from crfmap import paths
+    from crfmap.repro.buildinfo import wall_record
 
     path = Path(path or paths.GENERATED / "reproduce_timings.json")
     if not path.exists():
@@ -235,7 +237,7 @@ def reproduce_record(path=None, wall_path=None) -> dict:
     extra = {k: v for k, v in data.items() if k not in ("seconds", "total_seconds")}
     # the wall-clock record of the same run (repro.reproduce writes it after a full run), if it is that run's
     wall_path = paths.OUT / "logs" / "reproduce_wall.json" if wall_path is None else Path(wall_path)
-    wall = json.loads(wall_path.read_text()) if wall_path.exists() else {}
+    wall = wall_record(wall_path) if wall_path.exists() else {}
     if wall and wall_path.stat().st_mtime < path.stat().st_mtime:
         wall = {}  # older than the timings: another run's
     seconds = wall.get("make_seconds") or wall.get("workflow_seconds")
@@ -302,7 +304,7 @@ def preset_converge(quick=False, maps=None, threads=None) -> list:
             del r
         baseline = NumpyCheckerboard(grid, dtype=np.float32)
         baseline.iterate(1)
-        per_iteration = min(_timed(baseline.iterate, 2) for _ in range(2)) / 2
+        per_iteration = min(median_time(partial(baseline.iterate, 2), 1) for _ in range(2)) / 2  # best of 2
         del baseline
         budget = PRESET_GOAL_ITERATIONS * per_iteration
         seconds, iterations, converged = best
@@ -313,12 +315,6 @@ def preset_converge(quick=False, maps=None, threads=None) -> list:
                           note=f"{what}; crfmap infer's call (float64, tol 1e-5), best of 2, vs "
                           f"{PRESET_GOAL_ITERATIONS} iterations of the NumPy baseline (float32) on the same shape"))
     return out
-
-
-def _timed(fn, *args) -> float:
-    t = time.perf_counter()
-    fn(*args)
-    return time.perf_counter() - t
 
 
 # --- convergence --------------------------------------------------------------------------------------

@@ -102,7 +102,7 @@ def goals_rows(records, start_goal, converge_goal) -> list:
             continue
         shape = "x".join(str(n) for n in r["shape"])
         rows.append([f"default preset ({r['preset']}) to convergence, {r['map']}, {r['iterations']} it., "
-                     f"float64 [s]", shape, round(r["seconds"], 3),
+                     f"{r.get('dtype', 'float64')} [s]", shape, round(r["seconds"], 3),
                      f"<= {r['goal_seconds']:.3g} (5 NumPy-baseline it.)"])
     return rows
 
