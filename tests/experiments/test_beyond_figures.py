@@ -21,16 +21,26 @@ def test_phase_diagram_draws_unevenly_spaced_couplings_where_they_lie():
     assert np.array_equal(np.asarray(mesh.get_array()).reshape(2, 4), d["intel"]["brier"].T)
 
 
-def test_before_after_has_one_colour_bar_and_a_zoom_inset_per_panel():
+def test_before_after_has_one_colour_bar_and_the_zoomed_square_below_each_map():
     p = np.full((500, 600), 0.5)
     p[200, 100:500] = 0.9
     fig = before_after_figure({"raw": p, "refined": p}, "intel", (150, 250, 200, 300))
-    panels = [ax for ax in fig.axes if ax.get_title()]
-    assert len(panels) == 2
-    bars = [ax for ax in fig.axes if ax.get_xlabel() == "P(occupied)"]
-    assert len(bars) == 1
-    for ax in panels:
-        (inset,) = ax.child_axes
-        (image,) = inset.get_images()
+    maps = [ax for ax in fig.axes if ax.get_title().startswith("intel: ")]
+    zooms = [ax for ax in fig.axes if ax.get_title() == "the outlined square, every cell"]
+    assert len(maps) == 2 and len(zooms) == 2
+    assert len([ax for ax in fig.axes if ax.get_xlabel() == "P(occupied)"]) == 1
+    for ax, zoom in zip(maps, zooms):
+        (outline,) = ax.patches
+        assert outline.get_xy() == (199.5, 149.5) and (outline.get_width(), outline.get_height()) == (100, 100)
+        (image,) = zoom.get_images()
         assert image.get_array().shape == (100, 100)  # every cell of the window, not pooled
         assert image.get_extent() == [199.5, 299.5, 149.5, 249.5]
+
+
+def test_densest_window_finds_the_walls():
+    from crfmap.experiments.beyond_figures import densest_window
+
+    walls = np.zeros((300, 400), bool)
+    walls[250:260, 330:390] = True
+    y0, y1, x0, x1 = densest_window(walls, 80)
+    assert y0 <= 250 and y1 >= 260 and x0 <= 330 and x1 >= 390 and (y1 - y0, x1 - x0) == (80, 80)

@@ -50,26 +50,49 @@ def phase_diagram_figure(diagrams, couplings, link_strengths, critical):
     return fig
 
 
-def before_after_figure(maps, name, window):
-    """The same map raw and refined, side by side, one shared P(occupied) colour bar, with a zoom inset each.
+def densest_window(mask, side):
+    """The (y0, y1, x0, x1) square of ``side`` cells (clipped to the grid) holding the most True cells of ``mask``.
 
-    ``maps``: title -> P grid (same shape); ``window``: (y0, y1, x0, x1) cells shown enlarged in each panel's
-    inset and outlined where it lies in the whole map.
+    A coarse search (steps of side / 8) over a summed-area table.
+
+    >>> m = np.zeros((40, 40), bool); m[30:34, 5:9] = True
+    >>> densest_window(m, 8)
+    (26, 34, 1, 9)
+    """
+    mask = np.asarray(mask, bool)
+    h, w = mask.shape
+    side_y, side_x = min(side, h), min(side, w)
+    c = np.pad(mask.astype(np.int64).cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+    best, where = -1, (0, side_y, 0, side_x)
+    for y in range(0, h - side_y + 1, max(1, side_y // 8)):
+        for x in range(0, w - side_x + 1, max(1, side_x // 8)):
+            n = c[y + side_y, x + side_x] - c[y, x + side_x] - c[y + side_y, x] + c[y, x]
+            if n > best:
+                best, where = n, (y, y + side_y, x, x + side_x)
+    return where
+
+
+def before_after_figure(maps, name, window):
+    """The same map raw and refined, side by side, one shared P(occupied) colour bar; below each, the ``window``
+    (y0, y1, x0, x1 cells, outlined in the map above) enlarged, every cell drawn.
     """
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
 
     y0, y1, x0, x1 = window
-    fig, axes = plt.subplots(1, len(maps), figsize=(5 * len(maps), 5.8), squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(2, len(maps), figsize=(5 * len(maps), 10), squeeze=False, layout="constrained",
+                             height_ratios=(1, 1))
     im = None
-    for ax, (title, p) in zip(axes[0], maps.items()):
+    for col, (title, p) in enumerate(maps.items()):
         p = np.asarray(p)
-        im = show_grid(ax, p, title=f"{name}: {title}", colorbar=False)
-        inset = ax.inset_axes([0.55, 0.55, 0.44, 0.44])
-        # every cell of the window drawn (no pooling), in the whole map's cell coordinates
-        inset.imshow(p[y0:y1, x0:x1], cmap=OCCUPANCY_CMAP, vmin=0.0, vmax=1.0, origin="lower",
-                     interpolation="nearest", extent=(x0 - 0.5, x1 - 0.5, y0 - 0.5, y1 - 0.5))
-        inset.set_xticks([])
-        inset.set_yticks([])
-        ax.indicate_inset_zoom(inset, edgecolor="tab:blue")
+        im = show_grid(axes[0, col], p, title=f"{name}: {title}", colorbar=False)
+        axes[0, col].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="tab:blue",
+                                         linewidth=1.5))
+        zoom = axes[1, col]
+        zoom.imshow(p[y0:y1, x0:x1], cmap=OCCUPANCY_CMAP, vmin=0.0, vmax=1.0, origin="lower", interpolation="nearest",
+                    extent=(x0 - 0.5, x1 - 0.5, y0 - 0.5, y1 - 0.5))
+        zoom.set_title("the outlined square, every cell", fontsize="small")
+        zoom.set_xlabel("x [cells]")
+        zoom.set_ylabel("y [cells]")
     shared_colorbar(fig, im, axes, orientation="horizontal")
     return fig

@@ -177,14 +177,6 @@ def maps_figure(predictions, window, label):
 
 def busiest_window(split, side=200):
     """The ``side`` x ``side`` cell window with the most cells the first half observed (coarse search)."""
-    observed = (split.first_hits + split.first_passes > 0).astype(np.int64)
-    h, w = observed.shape
-    side_y, side_x = min(side, h), min(side, w)
-    c = np.pad(observed.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
-    best, where = -1, (0, side_y, 0, side_x)
-    for y in range(0, h - side_y + 1, max(1, side_y // 8)):
-        for x in range(0, w - side_x + 1, max(1, side_x // 8)):
-            n = c[y + side_y, x + side_x] - c[y, x + side_x] - c[y + side_y, x] + c[y, x]
-            if n > best:
-                best, where = n, (y, y + side_y, x, x + side_x)
-    return where
+    from crfmap.experiments.beyond_figures import densest_window
+
+    return densest_window(split.first_hits + split.first_passes > 0, side)
