@@ -203,6 +203,7 @@ def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None, new
     import json
 
     from crfmap.io.atomic import atomic_path
+    from crfmap.repro.buildinfo import wall_record
 
     path = Path(path or paths.OUT / "logs" / "reproduce_wall.json")
     now = time.time()
@@ -210,12 +211,9 @@ def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None, new
               "finished": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(now)),
               "make_seconds": None if started_at is None else round(now - float(started_at), 1),
               "new_venv": bool(new_venv)}
-    runs = []
-    try:
-        earlier = json.loads(path.read_text())
-        runs = earlier.get("runs") or [{k: v for k, v in earlier.items() if k != "runs"}]
-    except (OSError, ValueError, AttributeError):
-        pass  # no record yet, or an unreadable one: start a new list (the old file is replaced whole)
+    earlier = wall_record(path)  # {} when there is none or it cannot be read: a new list (the file is replaced whole)
+    earlier = earlier if isinstance(earlier, dict) else {}
+    runs = (earlier.get("runs") or [{k: v for k, v in earlier.items() if k != "runs"}]) if earlier else []
     runs = [r for r in runs if isinstance(r, dict)] + [record]
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
