@@ -5,7 +5,7 @@ observed layer holding the grid's P(occupied)); loopy belief propagation infers 
 cell's occupancy from its neighbours; the potentials can be learned.
 """
 from crfmap import _numba_cache  # noqa: F401  (first: a read-only install caches kernels in a user folder)
-from crfmap.environment import check_numba_threads_at_numba_import
+from crfmap.environment import check_numba_threads_at_numba_import, quiet_openmp_threads
 from crfmap.errors import CrfmapError, InputError, DataMissingError
 from crfmap.grid import OccupancyGrid, UNKNOWN
 
@@ -13,3 +13,4 @@ __all__ = ["CrfmapError", "InputError", "DataMissingError", "OccupancyGrid", "UN
 __version__ = "0.1.0"
 
 check_numba_threads_at_numba_import()  # numba reads NUMBA_NUM_THREADS once, at its import: checked then
+quiet_openmp_threads()  # before numba starts OpenMP's threads, which read it then

@@ -2,7 +2,9 @@
 
 Every numba dispatcher that Python code of ``crfmap.crf`` calls is wrapped (in the namespace it
 is looked up in) by a counter of the Python frames between the ``infer`` call and it. A hop is
-one call: ``infer -> solve -> PackedBlock.run -> _pass_serial`` is three.
+one call: ``infer -> solve -> PackedBlock.run -> _pass`` is three. Frames of
+:mod:`crfmap.crf.threads` do not count: ``run_all(kernel, calls, threads)`` names the kernel it
+runs where it is called and only shares the calls out over threads.
 """
 import sys
 
@@ -15,13 +17,15 @@ import crfmap.crf.engine.packed  # noqa: F401
 import crfmap.crf.engine.solve  # noqa: F401
 import crfmap.crf.inference.schedules  # noqa: F401
 import crfmap.crf.model.evidence  # noqa: F401
+import crfmap.crf.threads
 from crfmap.crf.inference import lbp
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.schedules import Checkerboard, Flooding, Sweep, Thesis
 
 MAX_HOPS = 3
-MESSAGE_UPDATES = {"_pass_serial", "_pass_parallel", "_checkerboard_iteration", "_flooding_iteration",
-                   "_sweep_iteration", "_pull_iteration"}  # the kernels that update messages
+THREADS_SOURCE = crfmap.crf.threads.__file__
+MESSAGE_UPDATES = {"_pass", "_checkerboard_half", "_flooding_rows",
+                   "_sweep_along_rows", "_sweep_along_columns", "_pull_iteration"}  # the kernels that update messages
 
 
 def _called_by_kernels(module):
@@ -41,7 +45,8 @@ def _count_hops(monkeypatch):
         def counted(*args):
             frame, n = sys._getframe(1), 1
             while frame is not None and frame.f_code is not infer.__code__:
-                frame, n = frame.f_back, n + 1
+                n += frame.f_code.co_filename != THREADS_SOURCE
+                frame = frame.f_back
             if frame is not None:
                 hops[name] = max(hops.get(name, 0), n)
             return dispatcher(*args)

@@ -152,7 +152,7 @@ def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles
         block = F.PackedBlock(h, w, np.float64, tables, MESSAGE_FLOOR)
         block.set_unary(obs, np.eye(2))
         passes = []  # (whole grid?, the pass's measured change), one per pass block.run makes
-        plan, measured = block._pass, block._pass_change
+        plan, measured = block._pass_arguments, block._pass_change
 
         def planned(n, threads, measure, active):
             passes.append([active is None, None])  # noqa: B023 (this iteration's list)
@@ -163,7 +163,7 @@ def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles
             passes[-1][1] = out[0]  # noqa: B023
             return out
 
-        block._pass, block._pass_change = planned, logged
+        block._pass_arguments, block._pass_change = planned, logged
         changes = block.run(max_iter, tol, threads=1, block=8, freeze=1e-8)
         whole_grid, last = passes[-1]
         if not whole_grid and last < tol:

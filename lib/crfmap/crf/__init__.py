@@ -14,7 +14,7 @@
   ``incremental`` (the public API the online mapper drives), ``messages`` and ``workspace``.
 
 From :func:`infer` to the kernel that updates a message: ``infer -> engine.solve.solve ->
-PackedBlock.run -> _pass_serial / _pass_parallel`` (fast), ``infer -> run_schedule -> kernel``
+PackedBlock.run -> _pass`` (fast), ``infer -> run_schedule -> kernel``
 (plain).
 
 Public API (imported on first use, so ``import crfmap.crf`` stays cheap):

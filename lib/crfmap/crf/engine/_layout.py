@@ -1,9 +1,14 @@
 """Numba kernels converting between the probability layout of :mod:`crfmap.crf.inference._plain_kernels` and the
-red/black odds planes of :mod:`crfmap.crf.engine._message_update` (private; used by :mod:`crfmap.crf.engine.packed`)."""
+red/black odds planes of :mod:`crfmap.crf.engine._message_update` (private; used by :mod:`crfmap.crf.engine.packed`).
+
+Kernels over rows take the band ``[r0, r1)`` of rows they do last and release the GIL, so
+:func:`crfmap.crf.threads.over_rows` runs bands on threads (compiling serial loops is two to
+three times faster than numba's parfor).
+"""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 
 # --- layout conversion -------------------------------------------------------------------------
@@ -22,24 +27,24 @@ def unary_odds(p, link, floor):
     return min(max(r, 1.0 / hi), hi)
 
 
-@njit(parallel=True, cache=True)
-def _pack_unary(prob, y0, x0, h, w, link, floor, un):
+@njit(nogil=True, cache=True)
+def _pack_unary(prob, y0, x0, h, w, link, floor, un, r0, r1):
     """Observation odds of cells [y0, y0 + h) x [x0, x0 + w) of ``prob`` into planes ``un``."""
-    for y in prange(h):
+    for y in range(r0, r1):
         for c in range(2):  # colour by colour: unit-stride writes, so the divisions vectorise
             off = (y + c) & 1
             for k in range(1, ((w - off + 1) >> 1) + 1):
                 un[c, y + 1, k] = unary_odds(prob[y0 + y, x0 + 2 * k - 2 + off], link, floor)
 
 
-@njit(parallel=True, cache=True)
-def _pack_messages(msg_p, y0, x0, h, w, floor, out):
+@njit(nogil=True, cache=True)
+def _pack_messages(msg_p, y0, x0, h, w, floor, out, r0, r1):
     """Probability messages [4, y, x] of the block into odds planes ``out`` (floored).
 
     A slot with no neighbour behind it in the whole grid stays uniform (odds 1).
     """
     grid_h, grid_w = msg_p.shape[1], msg_p.shape[2]
-    for y in prange(h):
+    for y in range(r0, r1):
         gy = y0 + y
         for x in range(w):
             gx = x0 + x
@@ -52,14 +57,14 @@ def _pack_messages(msg_p, y0, x0, h, w, floor, out):
                 out[c, d, y + 1, (x >> 1) + 1] = r
 
 
-@njit(parallel=True, cache=True)
-def _unpack_messages(packed, y0, x0, h, w, act, use_act, out):
+@njit(nogil=True, cache=True)
+def _unpack_messages(packed, y0, x0, h, w, act, use_act, out, r0, r1):
     """Odds planes back into probability messages ``out[4, y0 + y, x0 + x]``.
 
     With ``use_act`` only slots whose sender is an active cell of the block are written (the
     others did not change, and a round trip through odds would perturb them by rounding).
     """
-    for y in prange(h):
+    for y in range(r0, r1):
         for x in range(w):
             c = (x + y) & 1
             for d in range(4):
@@ -72,10 +77,10 @@ def _unpack_messages(packed, y0, x0, h, w, act, use_act, out):
                 out[d, y0 + y, x0 + x] = r / (1.0 + r)
 
 
-@njit(parallel=True, cache=True)
-def _beliefs_packed(un, packed, h, w, out):
+@njit(nogil=True, cache=True)
+def _beliefs_packed(un, packed, h, w, out, r0, r1):
     """P(occupied) of every cell of the block: observation odds times its four message odds."""
-    for y in prange(h):
+    for y in range(r0, r1):
         ce = y & 1  # colour of the even columns; cells 2m and 2m + 1 both sit at plane index m + 1
         co = 1 - ce
         for m in range(w >> 1):  # unit-stride reads of both planes, pairs of adjacent writes
@@ -111,20 +116,19 @@ def _active_extents(act, h, w, lo_k, hi_k):
             hi_k[c, y] = hi
 
 
-@njit(parallel=True, cache=True)
-def _fill_ones(planes):
-    """planes[...] = 1 over the last two axes in parallel (first touch of fresh memory on every thread)."""
-    flat = planes.reshape(-1, planes.shape[-2], planes.shape[-1])
-    for i in prange(flat.shape[0] * flat.shape[1]):
-        flat[i // flat.shape[1], i % flat.shape[1], :] = 1
+@njit(nogil=True, cache=True)
+def _fill_ones(rows, r0, r1):
+    """rows[r0:r1, :] = 1 (``rows``: planes seen as rows; on threads, so each first touches its share of fresh memory)."""
+    for i in range(r0, r1):
+        rows[i, :] = 1
 
 
-@njit(parallel=True, cache=True)
-def _pack_clamped(state, implied_odds, msg, act):
+@njit(nogil=True, cache=True)
+def _pack_clamped(state, implied_odds, msg, act, r0, r1):
     """Cells with ``state`` >= 0 (certain) stop sending (``act`` 0) and their four messages become
     ``implied_odds[d, state]``; the others send (``act`` 1). Whole grid, as :func:`crfmap.crf.model.evidence.clamp_messages`."""
     h, w = state.shape
-    for y in prange(h):
+    for y in range(r0, r1):
         for x in range(w):
             s = state[y, x]
             act[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if s < 0 else 0
@@ -140,9 +144,9 @@ def _pack_clamped(state, implied_odds, msg, act):
                 msg[(x + y - 1) & 1, 3, y, (x >> 1) + 1] = implied_odds[3, s]
 
 
-@njit(parallel=True, cache=True)
-def _pack_mask(mask, y0, x0, h, w, out):
-    for y in prange(h):
+@njit(nogil=True, cache=True)
+def _pack_mask(mask, y0, x0, h, w, out, r0, r1):
+    for y in range(r0, r1):
         for x in range(w):
             out[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if mask[y0 + y, x0 + x] else 0
 
@@ -154,12 +158,13 @@ def _uniform_send(U, a0, a1, a2, a3, lo, hi, clamp):
     return min(max(m, lo), hi) if clamp else m
 
 
-@njit(inline="always", cache=True)
-def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, own, un):
-    """Row y: its observation odds into ``un`` if ``own``, and into scratch row s of ``fa`` / ``fb``
-    what its red cells send from uniform messages (red plane indices, 1 at the ghosts); with
-    ``own``, returns (cells outside [0, 1] or not finite, cells the link makes certain).
+@njit(cache=True)  # not inlined: one compiled row for the three calls below (a call per row costs nothing)
+def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, r0, r1, un):
+    """Row y: its observation odds into ``un`` if the block [r0, r1) owns it, and into scratch row s of
+    ``fa`` / ``fb`` what its red cells send from uniform messages (red plane indices, 1 at the ghosts);
+    for an owned row, returns (cells outside [0, 1] or not finite, cells the link makes certain).
     Unit-stride loops, so that they vectorise."""
+    own = r0 <= y < r1  # a bool argument passed as a literal would compile one copy per value
     w = prob.shape[1]
     wp = un.shape[2]
     one = co[8]
@@ -205,8 +210,8 @@ def _uniform_sends(fu, fa, fb, off, n, co, lo, hi):
         fb[k] = one
 
 
-@njit(parallel=True, cache=True)  # no fastmath: the grid check must see NaN
-def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats):
+@njit(nogil=True, cache=True)  # no fastmath: the grid check must see NaN
+def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats, b):
     """Whole grid from uniform messages in one trip through memory: observation odds into ``un``,
     and the first half-sweep (red cells send; with uniform incoming messages they depend on the
     observation only) into ``msg``: black cells' slots get what their red neighbours send, the
@@ -215,76 +220,76 @@ def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats):
     per row block, into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link
     makes certain (hard evidence).
 
-    Rows go in blocks, one thread each; a block keeps three rows of what red cells send (E/N
-    table, W/S table) in a scratch, computing the rows just outside it again.
+    Rows go in ``stats.shape[0]`` blocks; this call does block ``b`` (blocks are independent, so
+    threads may run them at once). A block keeps three rows of what red cells send (E/N table, W/S
+    table) in a scratch, computing the rows just outside it again.
     """
     h, w = prob.shape
     wp = un.shape[2]
     nblocks = stats.shape[0]
     one = co[8]
-    for b in prange(nblocks):
-        r0 = b * h // nblocks
-        r1 = (b + 1) * h // nblocks
-        fu = np.empty(w, un.dtype)  # one row of observation odds
-        fa = np.ones((3, wp + 1), un.dtype)  # [row % 3, red plane index]
-        fb = np.ones((3, wp + 1), un.dtype)
-        bad = 0
-        certain = 0
-        if r0 > 0:
-            _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fa, fb, (r0 - 1) % 3, False, un)
-        if r0 < r1:
-            nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fa, fb, r0 % 3, True, un)
+    r0 = b * h // nblocks
+    r1 = (b + 1) * h // nblocks
+    fu = np.empty(w, un.dtype)  # one row of observation odds
+    fa = np.ones((3, wp + 1), un.dtype)  # [row % 3, red plane index]
+    fb = np.ones((3, wp + 1), un.dtype)
+    bad = 0
+    certain = 0
+    if r0 > 0:
+        _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fa, fb, (r0 - 1) % 3, r0, r1, un)
+    if r0 < r1:
+        nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fa, fb, r0 % 3, r0, r1, un)
+        bad += nb
+        certain += nc
+    for y in range(r0, r1):
+        if y + 1 < h:
+            nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fa, fb, (y + 1) % 3, r0, r1, un)
             bad += nb
             certain += nc
-        for y in range(r0, r1):
-            if y + 1 < h:
-                nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fa, fb, (y + 1) % 3, y + 1 < r1, un)
-                bad += nb
-                certain += nc
-            # red cells' slots: the black cells send into all of them in the first half-sweep of the
-            # next pass, except those no neighbour sends into (at the grid's edges): only those are set
-            off = y & 1
-            if off == 0:
-                msg[0, 0, y + 1, 1] = one  # x = 0: no west neighbour
-            if (w - 1 + y) & 1 == 0:
-                msg[0, 1, y + 1, (w - 1) // 2 + 1] = one  # x = w - 1: no east neighbour
-            if y == 0:
-                for k in range(wp):
-                    msg[0, 2, 1, k] = one
-            if y == h - 1:
-                for k in range(wp):
-                    msg[0, 3, h, k] = one
-            # black cells of row y (plane index k) hear from their west (slot 0), east (1), south
-            # (2, row y - 1) and north (3, row y + 1) neighbours; red plane indices as in _send
-            s, up, down = y % 3, (y + 1) % 3, (y + 2) % 3
-            e = y & 1
-            n = (w - ((y + 1) & 1) + 1) >> 1
+        # red cells' slots: the black cells send into all of them in the first half-sweep of the
+        # next pass, except those no neighbour sends into (at the grid's edges): only those are set
+        off = y & 1
+        if off == 0:
+            msg[0, 0, y + 1, 1] = one  # x = 0: no west neighbour
+        if (w - 1 + y) & 1 == 0:
+            msg[0, 1, y + 1, (w - 1) // 2 + 1] = one  # x = w - 1: no east neighbour
+        if y == 0:
+            for k in range(wp):
+                msg[0, 2, 1, k] = one
+        if y == h - 1:
+            for k in range(wp):
+                msg[0, 3, h, k] = one
+        # black cells of row y (plane index k) hear from their west (slot 0), east (1), south
+        # (2, row y - 1) and north (3, row y + 1) neighbours; red plane indices as in _send
+        s, up, down = y % 3, (y + 1) % 3, (y + 2) % 3
+        e = y & 1
+        n = (w - ((y + 1) & 1) + 1) >> 1
+        for k in range(1, n + 1):
+            msg[1, 0, y + 1, k] = fa[s, k - e]
+            msg[1, 1, y + 1, k] = fb[s, k - e + 1]
+        if y > 0:
             for k in range(1, n + 1):
-                msg[1, 0, y + 1, k] = fa[s, k - e]
-                msg[1, 1, y + 1, k] = fb[s, k - e + 1]
-            if y > 0:
-                for k in range(1, n + 1):
-                    msg[1, 2, y + 1, k] = fa[down, k]
-            else:
-                for k in range(1, n + 1):
-                    msg[1, 2, y + 1, k] = one
-            if y + 1 < h:
-                for k in range(1, n + 1):
-                    msg[1, 3, y + 1, k] = fb[up, k]
-            else:
-                for k in range(1, n + 1):
-                    msg[1, 3, y + 1, k] = one
-            for d in range(4):
-                msg[1, d, y + 1, 0] = one
-                for k in range(n + 1, wp):
-                    msg[1, d, y + 1, k] = one
-        stats[b, 0] = bad
-        stats[b, 1] = certain
-        if b == 0:  # the ghost rows
-            for c in range(2):
-                for k in range(wp):
-                    un[c, 0, k] = one
-                    un[c, h + 1, k] = one
-                    for d in range(4):
-                        msg[c, d, 0, k] = one
-                        msg[c, d, h + 1, k] = one
+                msg[1, 2, y + 1, k] = fa[down, k]
+        else:
+            for k in range(1, n + 1):
+                msg[1, 2, y + 1, k] = one
+        if y + 1 < h:
+            for k in range(1, n + 1):
+                msg[1, 3, y + 1, k] = fb[up, k]
+        else:
+            for k in range(1, n + 1):
+                msg[1, 3, y + 1, k] = one
+        for d in range(4):
+            msg[1, d, y + 1, 0] = one
+            for k in range(n + 1, wp):
+                msg[1, d, y + 1, k] = one
+    stats[b, 0] = bad
+    stats[b, 1] = certain
+    if b == 0:  # the ghost rows
+        for c in range(2):
+            for k in range(wp):
+                un[c, 0, k] = one
+                un[c, h + 1, k] = one
+                for d in range(4):
+                    msg[c, d, 0, k] = one
+                    msg[c, d, h + 1, k] = one

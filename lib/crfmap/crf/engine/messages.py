@@ -8,8 +8,9 @@ travelled in direction d (0 east-bound, from the west neighbour; 1 west-bound; 2
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
+from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 
 # Messages and observations are kept in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR]: products of five
@@ -50,15 +51,15 @@ def floored(messages, dtype, shape, floor):
 def beliefs_from_messages(unary, msg, out=None) -> np.ndarray:
     """P(occupied) of every hidden cell from its floored observation ``unary`` [y, x] and its messages."""
     out = np.empty(unary.shape, dtype=np.float64) if out is None else out
-    _beliefs(unary, msg, out)
+    over_rows(_beliefs, unary.shape[0], unary, msg, out)
     return out
 
 
-@njit(parallel=True, cache=True)
-def _beliefs(unary, msg, out):
+@njit(nogil=True, cache=True)
+def _beliefs(unary, msg, out, r0, r1):
     """P(occupied) of every hidden cell: its observation times its four incoming messages."""
-    h, w = unary.shape
-    for y in prange(h):
+    w = unary.shape[1]
+    for y in range(r0, r1):
         for x in range(w):
             u = unary[y, x]
             a = u * msg[0, y, x] * msg[1, y, x] * msg[2, y, x] * msg[3, y, x]

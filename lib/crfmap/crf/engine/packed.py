@@ -21,7 +21,8 @@ from crfmap.crf.engine._layout import (
     _pack_unary,
     _unpack_messages,
 )
-from crfmap.crf.engine._message_update import _pass_parallel, _pass_serial, _tile_max
+from crfmap.crf.engine._message_update import _pass, _tile_max
+from crfmap.crf.threads import over_rows, run_all
 
 PASS_ITERATIONS = 16  # iterations per pass at most (temporal blocking depth): the message change is measured
 # on the last of each pass, so a run may do up to PASS_ITERATIONS - 1 iterations more than it needed
@@ -98,8 +99,9 @@ class PackedBlock:
         self.msg, self.un = arrays if arrays is not None else (np.empty((2, 4, self.h + 2, wp), self.dtype),
                                                                 np.empty((2, self.h + 2, wp), self.dtype))
         if fill:
-            _fill_ones(self.msg)
-            _fill_ones(self.un)
+            for planes in (self.msg, self.un):
+                rows = planes.reshape(-1, planes.shape[-1])
+                over_rows(_fill_ones, rows.shape[0], rows)
         self.co = odds_coefficients(tables, self.dtype, floor)
         self.floor = float(floor)
         self.lo = self.dtype.type(floor / (1.0 - floor))
@@ -115,7 +117,7 @@ class PackedBlock:
     def set_unary(self, probability, link, y0=0, x0=0):
         """Observation odds from P(occupied) ``probability[y0:y0+h, x0:x0+w]`` through ``link``."""
         link = np.asarray(link, np.float64).ravel()
-        _pack_unary(probability, y0, x0, self.h, self.w, link, self.floor, self.un)
+        over_rows(_pack_unary, self.h, probability, y0, x0, self.h, self.w, link, self.floor, self.un)
 
     def start_uniform(self, probability, link, threads=1):
         """Whole-grid block from uniform messages: :meth:`set_unary` and the first half-sweep at once.
@@ -129,7 +131,8 @@ class PackedBlock:
         """
         link = np.asarray(link, np.float64).ravel()
         stats = np.zeros((max(1, min(4 * int(threads), self.h)), 2), np.int64)
-        _pack_start(probability, link, self.floor, self.co, self.lo, self.hi, self.un, self.msg, stats)
+        run_all(_pack_start, [(probability, link, self.floor, self.co, self.lo, self.hi, self.un, self.msg, stats, b)
+                              for b in range(stats.shape[0])], threads)
         self.first_phase = 1
         return int(stats[:, 0].sum()), int(stats[:, 1].sum())
 
@@ -138,7 +141,7 @@ class PackedBlock:
         if messages is None:
             self.msg.fill(1.0)
         else:
-            _pack_messages(messages, y0, x0, self.h, self.w, self.floor, self.msg)
+            over_rows(_pack_messages, self.h, messages, y0, x0, self.h, self.w, self.floor, self.msg)
 
     def set_mask(self, mask, y0=0, x0=0):
         """Only cells with ``mask[y0 + y, x0 + x]`` send (None: all)."""
@@ -149,7 +152,7 @@ class PackedBlock:
             self._extents_changed()
             return
         self.act = np.zeros((2, self.h + 2, plane_width(self.w)), np.uint8)
-        _pack_mask(mask, y0, x0, self.h, self.w, self.act)
+        over_rows(_pack_mask, self.h, mask, y0, x0, self.h, self.w, self.act)
         self.use_act = True
         self.lo_k = np.zeros((2, self.h), np.int64)
         self.hi_k = np.zeros((2, self.h), np.int64)
@@ -163,7 +166,7 @@ class PackedBlock:
         """
         p = np.clip(np.asarray(implied, np.float64), self.floor, 1.0 - self.floor)
         act = np.empty(self.un.shape, np.uint8)
-        _pack_clamped(state, (p / (1.0 - p)).astype(self.dtype), self.msg, act)
+        over_rows(_pack_clamped, state.shape[0], state, (p / (1.0 - p)).astype(self.dtype), self.msg, act)
         self.set_packed_mask(act)
 
     def set_packed_mask(self, act):
@@ -204,12 +207,12 @@ class PackedBlock:
     # --- reading it ---------------------------------------------------------------------------
     def messages(self, out, y0=0, x0=0):
         """Write the probability messages into ``out[4, y0:y0+h, x0:x0+w]``."""
-        _unpack_messages(self.msg, y0, x0, self.h, self.w, self.act, self.use_act, out)
+        over_rows(_unpack_messages, self.h, self.msg, y0, x0, self.h, self.w, self.act, self.use_act, out)
         return out
 
     def beliefs(self, out=None):
         out = np.empty((self.h, self.w), np.float64) if out is None else out
-        _beliefs_packed(self.un, self.msg, self.h, self.w, out)
+        over_rows(_beliefs_packed, self.h, self.un, self.msg, self.h, self.w, out)
         return out
 
     # --- running it -----------------------------------------------------------------------------
@@ -265,12 +268,12 @@ class PackedBlock:
         Returns the largest message change of the last iteration (NaN if not ``measure``) and,
         with ``per_tile``, the largest change per tile in it (else None).
         """
-        kernel, args, cb = self._pass(iterations, threads, measure, active)
-        kernel(*args)
+        args, cb = self._pass_arguments(iterations, threads, measure, active)
+        _pass(*args)
         return self._pass_change(cb, measure, per_tile)
 
-    def _pass(self, iterations, threads, measure, active):
-        """(kernel, its arguments, the per-column change buffer) of one pass; counts its cell updates."""
+    def _pass_arguments(self, iterations, threads, measure, active):
+        """The arguments of :func:`_pass` for one pass and its per-column change buffer; counts its cell updates."""
         edges = self.band_edges(iterations, threads)
         segs, nseg, cells = self._segments(active)
         n_ty, n_tx = self.tile_shape()
@@ -282,10 +285,7 @@ class PackedBlock:
             raise ValueError("the pass after start_uniform must run at least two iterations of the whole grid")
         first, self.first_phase = self.first_phase, 0
         self.cell_updates += (self.active_cells if active is None else cells) * iterations
-        if len(edges) == 2:
-            return _pass_serial, args + (int(edges[0]), int(edges[1]), int(iterations), int(measure_from), cb,
-                                         first), cb
-        return _pass_parallel, args + (edges, int(iterations), int(measure_from), cb, first), cb
+        return args + (edges, int(iterations), int(measure_from), cb, first), cb
 
     def _pass_change(self, cb, measure, per_tile):
         """The largest change of a pass's measured iteration, and per tile (see :meth:`run_pass`)."""
@@ -323,8 +323,8 @@ class PackedBlock:
         active = None
         while len(changes) < max_iter:
             n = min(size, block, max_iter - len(changes))
-            kernel, args, cb = self._pass(n, threads, True, active)
-            kernel(*args)  # the numba pass: every message update happens in there
+            args, cb = self._pass_arguments(n, threads, True, active)
+            _pass(*args)  # the numba pass: every message update happens in there
             change, per_tile = self._pass_change(cb, True, sparse)
             changes.extend([float("nan")] * (n - 1) + [change])
             whole_grid = active is None

@@ -17,7 +17,7 @@ Every kernel returns the largest change of any message it wrote.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 
 @njit(inline="always")
@@ -67,91 +67,79 @@ def _send_all(y, x, unary, src, dst, coef, floor, damping):
     return change
 
 
-@njit(parallel=True, cache=True)
-def _checkerboard_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping):
-    """Red cells send, then black cells send (in place; race-free: a half only reads its own slots)."""
-    row_change = np.zeros(y1 - y0)
-    w = unary.shape[1]
-    for parity in range(2):
-        for i in prange(y1 - y0):
-            y = y0 + i
-            c = row_change[i]
-            for x in range((parity + y) & 1, w, 2):
-                if use_active and not active[y, x]:
-                    continue
-                c = max(c, _send_all(y, x, unary, msg, msg, coef, floor, damping))
-            row_change[i] = c
-    return row_change.max() if row_change.size else 0.0
+# Kernels over a band of rows (or columns) take it as [r0, r1) last and release the GIL: the
+# schedules run the bands on threads (crfmap.crf.threads.over_rows), a barrier between half-sweeps.
 
 
-@njit(parallel=True, cache=True)
-def _flooding_iteration(unary, msg, new, coef, active, use_active, y0, y1, floor, damping):
-    """Every cell sends from the old messages ``msg`` into ``new`` (synchronous)."""
-    row_change = np.zeros(y1 - y0)
+@njit(nogil=True, cache=True)
+def _checkerboard_half(unary, msg, coef, active, use_active, parity, y0, floor, damping, r0, r1):
+    """Cells with (x + y) % 2 == parity of rows [y0 + r0, y0 + r1) send (in place; race-free: a half
+    only reads the other half's slots)."""
     w = unary.shape[1]
-    for i in prange(y1 - y0):
-        y = y0 + i
-        c = 0.0
+    c = 0.0
+    for y in range(y0 + r0, y0 + r1):
+        for x in range((parity + y) & 1, w, 2):
+            if use_active and not active[y, x]:
+                continue
+            c = max(c, _send_all(y, x, unary, msg, msg, coef, floor, damping))
+    return c
+
+
+@njit(nogil=True, cache=True)
+def _flooding_rows(unary, msg, new, coef, active, use_active, y0, floor, damping, r0, r1):
+    """Every cell of rows [y0 + r0, y0 + r1) sends from the old messages ``msg`` into ``new`` (synchronous)."""
+    w = unary.shape[1]
+    c = 0.0
+    for y in range(y0 + r0, y0 + r1):
         for x in range(w):
             if use_active and not active[y, x]:
                 continue
             c = max(c, _send_all(y, x, unary, msg, new, coef, floor, damping))
-        row_change[i] = c
-    return row_change.max() if row_change.size else 0.0
+    return c
 
 
-@njit(parallel=True, cache=True)
-def _sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping):
-    """Four directional sweeps (thesis sec. 2.6.2): east-bound, west-bound, north-bound, south-bound.
+@njit(nogil=True, cache=True)
+def _sweep_along_rows(unary, msg, coef, active, use_active, d, y0, floor, damping, r0, r1):
+    """The east-bound (d = 0) or west-bound (d = 1) sweep of rows [y0 + r0, y0 + r1), each row in order along d.
 
-    Each sweep updates the messages of one direction in order along it, so information
-    crosses the whole grid in one sweep.
+    A row's messages of direction d depend only on that row's, so rows are independent.
     """
-    h, w = unary.shape
-    change = np.zeros(max(h, w))
-    # east-bound: column by column, rows in parallel
-    for x in range(w - 1):
-        for i in prange(y1 - y0):
-            y = y0 + i
+    w = unary.shape[1]
+    change = 0.0
+    for y in range(y0 + r0, y0 + r1):
+        for i in range(w - 1):
+            x = i if d == 0 else w - 1 - i
             if use_active and not active[y, x]:
                 continue
-            old = msg[0, y, x + 1]
-            m = _message(unary[y, x], msg[0, y, x], msg[2, y, x], msg[3, y, x],
-                         coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3], floor, damping, old)
-            msg[0, y, x + 1] = m
-            change[y] = max(change[y], abs(m - old))
-    # west-bound
-    for x in range(w - 1, 0, -1):
-        for i in prange(y1 - y0):
-            y = y0 + i
+            to = x + 1 if d == 0 else x - 1
+            old = msg[d, y, to]
+            m = _message(unary[y, x], msg[d, y, x], msg[2, y, x], msg[3, y, x],
+                         coef[d, 0], coef[d, 1], coef[d, 2], coef[d, 3], floor, damping, old)
+            msg[d, y, to] = m
+            change = max(change, abs(m - old))
+    return change
+
+
+@njit(nogil=True, cache=True)
+def _sweep_along_columns(unary, msg, coef, active, use_active, d, y0, y1, floor, damping, r0, r1):
+    """The north-bound (d = 2) or south-bound (d = 3) sweep of columns [r0, r1), rows of [y0, y1) in order along d."""
+    h = unary.shape[0]
+    change = 0.0
+    if d == 2:
+        start, stop, step = max(y0, 0), min(y1, h - 1), 1
+    else:
+        start, stop, step = min(y1, h) - 1, max(y0, 1) - 1, -1
+    for y in range(start, stop, step):
+        to = y + step
+        for x in range(r0, r1):
             if use_active and not active[y, x]:
                 continue
-            old = msg[1, y, x - 1]
-            m = _message(unary[y, x], msg[1, y, x], msg[2, y, x], msg[3, y, x],
-                         coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3], floor, damping, old)
-            msg[1, y, x - 1] = m
-            change[y] = max(change[y], abs(m - old))
-    # north-bound: row by row, columns in parallel
-    for y in range(max(y0, 0), min(y1, h - 1)):
-        for x in prange(w):
-            if use_active and not active[y, x]:
-                continue
-            old = msg[2, y + 1, x]
-            m = _message(unary[y, x], msg[0, y, x], msg[1, y, x], msg[2, y, x],
-                         coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3], floor, damping, old)
-            msg[2, y + 1, x] = m
-            change[x] = max(change[x], abs(m - old))
-    # south-bound
-    for y in range(min(y1, h) - 1, max(y0, 1) - 1, -1):
-        for x in prange(w):
-            if use_active and not active[y, x]:
-                continue
-            old = msg[3, y - 1, x]
-            m = _message(unary[y, x], msg[0, y, x], msg[1, y, x], msg[3, y, x],
-                         coef[3, 0], coef[3, 1], coef[3, 2], coef[3, 3], floor, damping, old)
-            msg[3, y - 1, x] = m
-            change[x] = max(change[x], abs(m - old))
-    return change.max()
+            old = msg[d, to, x]
+            m = _message(unary[y, x], msg[0, y, x], msg[1, y, x], msg[d, y, x],
+                         coef[d, 0], coef[d, 1], coef[d, 2], coef[d, 3], floor, damping, old)
+            msg[d, to, x] = m
+            change = max(change, abs(m - old))
+    return change
 
 
 @njit(cache=True)

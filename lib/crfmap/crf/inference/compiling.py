@@ -5,7 +5,7 @@ on-disk cache holds no entry for its current source. Checking costs one small fi
 dispatcher, once per process.
 
 >>> from crfmap.crf.inference import _plain_kernels as K
->>> isinstance(needs_compiling(K._checkerboard_iteration), bool)
+>>> isinstance(needs_compiling(K._checkerboard_half), bool)
 True
 """
 from __future__ import annotations
@@ -57,10 +57,11 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fu
         return False  # uncompiled: say it once per process, not on every call
     if fast:  # the kernels every such call runs
         kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._tile_max)
-        kernels += (F._pass_parallel,) if key[2] else (F._pass_serial,)
+        kernels += (F._pass,)
     else:
-        kernels = {"checkerboard": (K._checkerboard_iteration,), "flooding": (K._flooding_iteration,),
-                   "sweep": (K._sweep_iteration,), "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
+        kernels = {"checkerboard": (K._checkerboard_half,), "flooding": (K._flooding_rows,),
+                   "sweep": (K._sweep_along_rows, K._sweep_along_columns),
+                   "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
         kernels += (M._beliefs,)
     said = announce(*kernels)
     if said:

@@ -30,6 +30,7 @@ from crfmap.crf.engine.messages import beliefs_from_messages, floored, initial_m
 from crfmap.crf.inference import _plain_kernels as K
 from crfmap.crf.model.evidence import clamp_messages
 from crfmap.crf.model.potentials import link_unary, message_coefficients
+from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 
 KERNELS = ("auto", "fast", "plain")
@@ -178,14 +179,19 @@ def run_schedule(settings, probability, tables, link, max_iter, tol, senders, me
             if cells.size:
                 sy, sx = (int(v) for v in cells[0])
     for _ in range(max_iter):
-        if schedule == "checkerboard":
-            c = K._checkerboard_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
+        if schedule == "checkerboard":  # red cells send, then black cells
+            c = max(max(over_rows(K._checkerboard_half, y1 - y0, unary, msg, coef, active, use_active, parity, y0,
+                                  floor, damping), default=0.0) for parity in (0, 1))
         elif schedule == "flooding":
-            c = K._flooding_iteration(unary, msg, new, coef, active, use_active, y0, y1, floor, damping)
+            c = max(over_rows(K._flooding_rows, y1 - y0, unary, msg, new, coef, active, use_active, y0, floor,
+                              damping), default=0.0)
             msg, new = new, msg
             new[...] = msg  # slots not written this round (inactive senders) keep their values
-        elif schedule == "sweep":
-            c = K._sweep_iteration(unary, msg, coef, active, use_active, y0, y1, floor, damping)
+        elif schedule == "sweep":  # east-, west-, north-, south-bound (thesis sec. 2.6.2): each crosses the grid
+            c = max([max(over_rows(K._sweep_along_rows, y1 - y0, unary, msg, coef, active, use_active, d, y0, floor,
+                                   damping), default=0.0) for d in (0, 1)]
+                    + [max(over_rows(K._sweep_along_columns, shape[1], unary, msg, coef, active, use_active, d, y0, y1,
+                                     floor, damping), default=0.0) for d in (2, 3)])
         else:
             order = K._bfs_order(shape[0], shape[1], walk, use_walk, sy, sx)
             c = K._pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)

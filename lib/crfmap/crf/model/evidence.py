@@ -24,8 +24,9 @@ every contradiction; on a loopy grid it may miss some (then the floors keep LBP 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
+from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 
 UNCERTAIN = -1  # state of a cell that is not certain (1 certainly occupied, 0 certainly empty)
@@ -35,13 +36,12 @@ SHOWN = 3  # cells named in a contradiction message at most
 _STEPS = np.array([[0, 1], [0, -1], [1, 0], [-1, 0]], np.int64)
 
 
-@njit(parallel=True, cache=True)
-def _certain_from_observations(prob, link, out):
-    """1 / 0 where the link makes a cell certainly occupied / empty, UNCERTAIN elsewhere; returns the count."""
-    h, w = prob.shape
-    counts = np.zeros(h, np.int64)
-    for y in prange(h):
-        n = 0
+@njit(nogil=True, cache=True)
+def _certain_from_observations(prob, link, out, r0, r1):
+    """1 / 0 where the link makes a cell certainly occupied / empty, UNCERTAIN elsewhere (rows [r0, r1)); the count."""
+    w = prob.shape[1]
+    n = 0
+    for y in range(r0, r1):
         for x in range(w):
             p = prob[y, x]
             occ = link[0] * p + link[1] * (1.0 - p)
@@ -53,16 +53,15 @@ def _certain_from_observations(prob, link, out):
                 s = 0
             out[y, x] = s
             n += s >= 0
-        counts[y] = n
-    return counts.sum()
+    return n
 
 
-@njit(parallel=True, cache=True)
-def _count_certain_observations(prob, link):
-    """How many cells the link makes certain (as :func:`_certain_from_observations`, writing nothing)."""
-    h, w = prob.shape
+@njit(nogil=True, cache=True)
+def _count_certain_observations(prob, link, r0, r1):
+    """How many cells of rows [r0, r1) the link makes certain (as :func:`_certain_from_observations`, writing nothing)."""
+    w = prob.shape[1]
     n = 0
-    for y in prange(h):
+    for y in range(r0, r1):
         for x in range(w):
             p = prob[y, x]
             occ = link[0] * p + link[1] * (1.0 - p)
@@ -136,11 +135,11 @@ def _propagate(state, forced, senders, use_senders, steps):
     return -1, -1
 
 
-@njit(parallel=True, cache=True)
-def _send_clamped(state, senders, use_senders, implied, steps, msg):
+@njit(nogil=True, cache=True)
+def _send_clamped(state, senders, use_senders, implied, steps, msg, r0, r1):
     """Write into ``msg`` (layout of :mod:`._lbp_kernels`) the messages every certain sender implies."""
     h, w = state.shape
-    for y in prange(h):
+    for y in range(r0, r1):
         for x in range(w):
             s = state[y, x]
             if s < 0 or (use_senders and not senders[y, x]):
@@ -151,10 +150,10 @@ def _send_clamped(state, senders, use_senders, implied, steps, msg):
                     msg[d, ny, nx] = implied[d, s]
 
 
-@njit(parallel=True, cache=True)
-def _set_beliefs(state, beliefs):
-    h, w = state.shape
-    for y in prange(h):
+@njit(nogil=True, cache=True)
+def _set_beliefs(state, beliefs, r0, r1):
+    w = state.shape[1]
+    for y in range(r0, r1):
         for x in range(w):
             if state[y, x] >= 0:
                 beliefs[y, x] = state[y, x]
@@ -197,10 +196,10 @@ def certain_states(probability, link, tables, senders=None, name="grid"):
     prob = np.ascontiguousarray(probability, dtype=np.float64)
     link = np.asarray(link, np.float64).ravel()
     forced = forced_states(tables)
-    if not np.any(forced == -2) and _count_certain_observations(prob, link) == 0:
+    if not np.any(forced == -2) and sum(over_rows(_count_certain_observations, prob.shape[0], prob, link)) == 0:
         return None  # the common case: no state array (a full-size write into fresh memory)
     state = np.empty(prob.shape, np.int8)
-    n = _certain_from_observations(prob, link, state)
+    n = sum(over_rows(_certain_from_observations, prob.shape[0], prob, link, state))
     if np.any(forced != UNCERTAIN):
         use = senders is not None
         mask = np.ascontiguousarray(senders, dtype=np.bool_) if use else np.ones((1, 1), np.bool_)
@@ -224,11 +223,11 @@ def clamp_messages(state, tables, msg, senders=None):
     """Set the messages every certain cell in ``senders`` (None: all) sends to the ones its state implies."""
     use = senders is not None
     mask = np.ascontiguousarray(senders, dtype=np.bool_) if use else np.ones((1, 1), np.bool_)
-    _send_clamped(state, mask, use, implied_messages(tables).astype(msg.dtype), _STEPS, msg)
+    over_rows(_send_clamped, state.shape[0], state, mask, use, implied_messages(tables).astype(msg.dtype), _STEPS, msg)
     return msg
 
 
 def clamp_beliefs(state, beliefs):
     """Certain cells' beliefs become exactly their state (in place)."""
-    _set_beliefs(state, beliefs)
+    over_rows(_set_beliefs, state.shape[0], state, beliefs)
     return beliefs
