@@ -54,8 +54,8 @@ def run_all(kernel, calls, threads=None) -> list:
     """``kernel(*args)`` for every ``args`` of ``calls`` on ``threads`` threads, the caller's included; results in order.
 
     Thread t runs calls t, t + threads, t + 2 threads, ... (so with two calls per thread, the first
-    and last -- e.g. the bands at the grid's edges -- go to different threads). A kernel's
-    exception is raised here, after every thread finished.
+    and last -- e.g. the bands at the grid's edges -- go to different threads). A thread stops at
+    its first failing call; the exception is raised here, after every thread finished.
     """
     calls = list(calls)
     n = min(thread_count(threads), len(calls))
