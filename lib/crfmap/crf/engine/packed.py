@@ -268,12 +268,14 @@ class PackedBlock:
         Returns the largest message change of the last iteration (NaN if not ``measure``) and,
         with ``per_tile``, the largest change per tile in it (else None).
         """
-        args, cb = self._pass_arguments(iterations, threads, measure, active)
-        _pass(*args)
+        args, stages, cb = self._pass_arguments(iterations, threads, measure, active)
+        for stage in range(stages):
+            _pass(*args, stage)
         return self._pass_change(cb, measure, per_tile)
 
     def _pass_arguments(self, iterations, threads, measure, active):
-        """The arguments of :func:`_pass` for one pass and its per-column change buffer; counts its cell updates."""
+        """The arguments of :func:`_pass` for one pass but its stage, how many stages it has (1 with one band, else 2)
+        and its per-column change buffer; counts its cell updates."""
         edges = self.band_edges(iterations, threads)
         segs, nseg, cells = self._segments(active)
         n_ty, n_tx = self.tile_shape()
@@ -285,7 +287,7 @@ class PackedBlock:
             raise ValueError("the pass after start_uniform must run at least two iterations of the whole grid")
         first, self.first_phase = self.first_phase, 0
         self.cell_updates += (self.active_cells if active is None else cells) * iterations
-        return args + (edges, int(iterations), int(measure_from), cb, first), cb
+        return args + (edges, int(iterations), int(measure_from), cb, first), min(2, len(edges) - 1), cb
 
     def _pass_change(self, cb, measure, per_tile):
         """The largest change of a pass's measured iteration, and per tile (see :meth:`run_pass`)."""
@@ -323,8 +325,9 @@ class PackedBlock:
         active = None
         while len(changes) < max_iter:
             n = min(size, block, max_iter - len(changes))
-            args, cb = self._pass_arguments(n, threads, True, active)
-            _pass(*args)  # the numba pass: every message update happens in there
+            args, stages, cb = self._pass_arguments(n, threads, True, active)
+            for stage in range(stages):  # the bands, then the gaps between them
+                _pass(*args, stage)  # the numba pass: every message update happens in there
             change, per_tile = self._pass_change(cb, True, sparse)
             changes.extend([float("nan")] * (n - 1) + [change])
             whole_grid = active is None
