@@ -12,6 +12,8 @@
   ``EngineResult``), ``packed`` (red/black odds planes and the passes over them),
   ``_message_update`` (the numba message update), ``_layout`` (packing kernels),
   ``incremental`` (the public API the online mapper drives), ``messages`` and ``workspace``.
+- :mod:`crfmap.crf.threads`: row bands of ``nogil`` kernels on Python threads (cheaper to compile
+  than numba's parallel loops), used by all three layers.
 
 From :func:`infer` to the kernel that updates a message: ``infer -> engine.solve.solve ->
 PackedBlock.run -> _pass`` (fast), ``infer -> run_schedule -> kernel``
