@@ -67,3 +67,24 @@ def test_every_row_band_kernel_releases_the_gil():
                 banded.append(value)
                 assert value.targetoptions.get("nogil"), f"{value.py_func.__qualname__} is not compiled nogil=True"
     assert len(banded) >= 10  # the packing, beliefs, evidence and plain-schedule kernels
+
+
+def _child_runs_bands(queue):
+    queue.put(run_all(lambda k: k + 1, [(k,) for k in range(4)], 2))
+
+
+def test_a_forked_child_runs_bands_on_threads_of_its_own():
+    """After fork the parent's pool threads do not exist in the child: its calls must not wait on them."""
+    import multiprocessing
+
+    run_all(lambda k: k, [(0,), (1,)], 2)  # the parent's pool exists
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_child_runs_bands, args=(queue,))
+    child.start()
+    child.join(60)  # a hang guard, not a timing: the child needs well under a second
+    alive = child.is_alive()
+    if alive:
+        child.kill()
+    assert not alive and child.exitcode == 0
+    assert queue.get(timeout=5) == [1, 2, 3, 4]

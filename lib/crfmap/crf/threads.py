@@ -22,11 +22,23 @@ which :func:`crfmap.crf.inference.lbp.infer` sets for the duration of a call).
 """
 from __future__ import annotations
 
+import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
 _pools: dict = {}
 _lock = threading.Lock()
+
+
+def _forget_pools_after_fork():
+    """A forked child has none of its parent's threads: it must not wait on the parent's pools."""
+    global _lock
+    _pools.clear()
+    _lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pools_after_fork)
 
 
 def thread_count(threads=None) -> int:
