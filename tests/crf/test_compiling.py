@@ -25,6 +25,6 @@ def test_note_for_a_kernel_not_yet_compiled_and_not_after(capsys):
 def test_no_note_once_infer_has_run(capsys):
     infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     capsys.readouterr()
-    assert not needs_compiling(K._checkerboard_half) and not needs_compiling(M._beliefs)
+    assert not needs_compiling(K._send_rows) and not needs_compiling(M._beliefs)
     infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     assert capsys.readouterr().err == ""

@@ -24,7 +24,7 @@ from crfmap.crf.inference.schedules import Checkerboard, Flooding, Sweep, Thesis
 
 MAX_HOPS = 3
 THREADS_SOURCE = crfmap.crf.threads.__file__
-MESSAGE_UPDATES = {"_pass", "_checkerboard_half", "_flooding_rows",
+MESSAGE_UPDATES = {"_pass", "_send_rows",
                    "_sweep_along_rows", "_sweep_along_columns", "_pull_iteration"}  # the kernels that update messages
 
 

@@ -72,29 +72,18 @@ def _send_all(y, x, unary, src, dst, coef, floor, damping):
 
 
 @njit(nogil=True, cache=True)
-def _checkerboard_half(unary, msg, coef, active, use_active, parity, y0, floor, damping, r0, r1):
-    """Cells with (x + y) % 2 == parity of rows [y0 + r0, y0 + r1) send (in place; race-free: a half
-    only reads the other half's slots)."""
+def _send_rows(unary, msg, dst, coef, active, use_active, parity, y0, floor, damping, r0, r1):
+    """Cells of rows [y0 + r0, y0 + r1) send from ``msg`` into ``dst``: those with (x + y) % 2 == parity
+    (a checkerboard half, ``dst`` is ``msg``: in place, race-free as a half only reads the other
+    half's slots), or every cell with ``parity`` -1 (flooding: ``dst`` a second array, synchronous)."""
     w = unary.shape[1]
+    step = 1 if parity < 0 else 2
     c = 0.0
     for y in range(y0 + r0, y0 + r1):
-        for x in range((parity + y) & 1, w, 2):
+        for x in range(0 if parity < 0 else (parity + y) & 1, w, step):
             if use_active and not active[y, x]:
                 continue
-            c = max(c, _send_all(y, x, unary, msg, msg, coef, floor, damping))
-    return c
-
-
-@njit(nogil=True, cache=True)
-def _flooding_rows(unary, msg, new, coef, active, use_active, y0, floor, damping, r0, r1):
-    """Every cell of rows [y0 + r0, y0 + r1) sends from the old messages ``msg`` into ``new`` (synchronous)."""
-    w = unary.shape[1]
-    c = 0.0
-    for y in range(y0 + r0, y0 + r1):
-        for x in range(w):
-            if use_active and not active[y, x]:
-                continue
-            c = max(c, _send_all(y, x, unary, msg, new, coef, floor, damping))
+            c = max(c, _send_all(y, x, unary, msg, dst, coef, floor, damping))
     return c
 
 

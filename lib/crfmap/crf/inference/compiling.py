@@ -5,7 +5,7 @@ on-disk cache holds no entry for its current source. Checking costs one small fi
 dispatcher, once per process.
 
 >>> from crfmap.crf.inference import _plain_kernels as K
->>> isinstance(needs_compiling(K._checkerboard_half), bool)
+>>> isinstance(needs_compiling(K._send_rows), bool)
 True
 """
 from __future__ import annotations
@@ -59,7 +59,7 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fu
         kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._tile_max)
         kernels += (F._pass,)
     else:
-        kernels = {"checkerboard": (K._checkerboard_half,), "flooding": (K._flooding_rows,),
+        kernels = {"checkerboard": (K._send_rows,), "flooding": (K._send_rows,),
                    "sweep": (K._sweep_along_rows, K._sweep_along_columns),
                    "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
         kernels += (M._beliefs,)

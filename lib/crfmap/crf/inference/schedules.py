@@ -180,10 +180,10 @@ def run_schedule(settings, probability, tables, link, max_iter, tol, senders, me
                 sy, sx = (int(v) for v in cells[0])
     for _ in range(max_iter):
         if schedule == "checkerboard":  # red cells send, then black cells
-            c = max(max(over_rows(K._checkerboard_half, y1 - y0, unary, msg, coef, active, use_active, parity, y0,
+            c = max(max(over_rows(K._send_rows, y1 - y0, unary, msg, msg, coef, active, use_active, parity, y0,
                                   floor, damping), default=0.0) for parity in (0, 1))
         elif schedule == "flooding":
-            c = max(over_rows(K._flooding_rows, y1 - y0, unary, msg, new, coef, active, use_active, y0, floor,
+            c = max(over_rows(K._send_rows, y1 - y0, unary, msg, new, coef, active, use_active, -1, y0, floor,
                               damping), default=0.0)
             msg, new = new, msg
             new[...] = msg  # slots not written this round (inactive senders) keep their values
