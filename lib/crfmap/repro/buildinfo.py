@@ -122,11 +122,12 @@ def _commit() -> str:
 
 
 def wall_record(path: Path | None = None) -> dict:
-    """The last full `make reproduce`'s record, or {} when none was written."""
+    """The last full `make reproduce`'s record, or {} when none was written (or it is not a JSON object)."""
     try:
-        return json.loads(Path(path or paths.OUT / "logs" / "reproduce_wall.json").read_text())
+        record = json.loads(Path(path or paths.OUT / "logs" / "reproduce_wall.json").read_text())
     except (OSError, ValueError):
         return {}
+    return record if isinstance(record, dict) else {}
 
 
 def describe(data: bool = True) -> dict:

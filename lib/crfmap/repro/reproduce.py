@@ -212,7 +212,6 @@ def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None, new
               "make_seconds": None if started_at is None else round(now - float(started_at), 1),
               "new_venv": bool(new_venv)}
     earlier = wall_record(path)  # {} when there is none or it cannot be read: a new list (the file is replaced whole)
-    earlier = earlier if isinstance(earlier, dict) else {}
     runs = (earlier.get("runs") or [{k: v for k, v in earlier.items() if k != "runs"}]) if earlier else []
     runs = [r for r in runs if isinstance(r, dict)] + [record]
     path.parent.mkdir(parents=True, exist_ok=True)
