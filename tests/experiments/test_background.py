@@ -87,3 +87,33 @@ def test_exact_refuses_big_models_and_energy_refuses_non_spins():
         ising_exact((5, 5))
     with pytest.raises(InputError, match="^spins:"):
         ising_energy([0, 1])
+
+
+def _gibbs_by_hand(shape, coupling, field, sweeps, chains, seed, initial=None):
+    """The sampler written out site by site: the same draws (one uniform per site and colour, in C order), the
+    conditional P(+1) = e^local / (e^local + e^-local) from the neighbours' current spins."""
+    shape = (shape,) if isinstance(shape, int) else shape
+    full = shape if chains is None else (chains,) + shape
+    rng = np.random.default_rng(seed)
+    spins = np.where(rng.random(full) < 0.5, 1, -1).astype(np.int8) if initial is None else \
+        np.broadcast_to(initial, full).astype(np.int8)
+    lattice = spins.reshape((-1,) + ((1,) if len(shape) == 1 else ()) + shape)
+    _, h, w = lattice.shape
+    for _ in range(sweeps):
+        for colour in (0, 1):
+            u = rng.random(full).reshape(lattice.shape)
+            for c, y, x in np.ndindex(lattice.shape):
+                if (y + x) % 2 != colour:
+                    continue
+                near = sum(int(lattice[c, yy, xx]) for yy, xx in ((y - 1, x), (y + 1, x), (y, x - 1), (y, x + 1))
+                           if 0 <= yy < h and 0 <= xx < w)
+                local = coupling * near + field
+                lattice[c, y, x] = 1 if u[c, y, x] < np.exp(local) / (np.exp(local) + np.exp(-local)) else -1
+    return spins
+
+
+@pytest.mark.parametrize("shape, chains, initial", [(9, None, None), (6, 3, None), ((4, 5), None, None),
+                                                     ((3, 4), 2, np.ones((3, 4), np.int8))])
+def test_gibbs_kernel_draws_what_the_site_by_site_sampler_draws(shape, chains, initial):
+    kernel = gibbs_ising(shape, coupling=0.7, field=-0.2, sweeps=6, chains=chains, seed=4, initial=initial)
+    assert np.array_equal(kernel, _gibbs_by_hand(shape, 0.7, -0.2, 6, chains, 4, initial))

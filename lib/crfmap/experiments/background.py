@@ -21,6 +21,7 @@ above ``coupling ~ 0.4407``, Onsager's critical value), a negative one makes the
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from crfmap.checks import check_number
 from crfmap.errors import InputError
@@ -147,18 +148,38 @@ def gibbs_ising(shape, coupling=1.0, field=0.0, *, sweeps=100, chains=None, seed
         if spins.shape != full or not np.isin(spins, (-1, 1)).all():
             raise InputError("initial", f"expected -1/+1 spins of shape {full}, got shape {spins.shape}")
         spins = spins.astype(np.int8, copy=True)
-    colour = np.indices(shape).sum(axis=0) % 2
-    masks = [colour == 0, colour == 1]
     # P(s_i = +1 | neighbours) = e^local / (e^local + e^-local), local = J * (neighbour sum) + h: the sum takes
     # only the 4 * ndim + 1 values -2 ndim .. 2 ndim, so the probabilities are a table (no tanh per site)
     reach = 2 * len(shape)
     p_up = 0.5 * (1.0 + np.tanh(coupling * np.arange(-reach, reach + 1, dtype=np.float64) + field))
+    lattice = spins.reshape((-1,) + ((1,) if len(shape) == 1 else ()) + shape)  # (chains, height, width), a view
     from tqdm.auto import tqdm
 
     for _ in tqdm(range(sweeps), desc="Gibbs sweeps", disable=not progress, leave=False):
-        for mask in masks:
-            level = _neighbour_sum(spins, len(shape), np.int8)
-            level += reach
-            draw = np.where(rng.random(full) < p_up[level], 1, -1).astype(np.int8)
-            spins = np.where(mask, draw, spins)
+        for colour in (0, 1):
+            # one uniform per site, every site (the other colour's are drawn and unused): the stream of draws,
+            # and so every sample for a seed, stays what the vectorised sampler this kernel replaced drew
+            uniform = rng.random(full).reshape(lattice.shape)
+            _redraw_colour(lattice, uniform, p_up, colour)
     return spins
+
+
+@njit(cache=True, nogil=True)
+def _redraw_colour(spins, uniform, p_up, colour):
+    """Redraw, in place, every site of one colour ((y + x) % 2) of (chains, height, width) spins from its conditional:
+    +1 where its uniform is below p_up[neighbour sum + reach]. The other colour's sites, its only neighbours, stay."""
+    chains, h, w = spins.shape
+    reach = (len(p_up) - 1) // 2
+    for c in range(chains):
+        for y in range(h):
+            for x in range((y + colour) % 2, w, 2):
+                level = reach
+                if y > 0:
+                    level += spins[c, y - 1, x]
+                if y + 1 < h:
+                    level += spins[c, y + 1, x]
+                if x > 0:
+                    level += spins[c, y, x - 1]
+                if x + 1 < w:
+                    level += spins[c, y, x + 1]
+                spins[c, y, x] = 1 if uniform[c, y, x] < p_up[level] else -1
