@@ -5,7 +5,7 @@ functions that reach every numba kernel the command line and the notebooks use (
 ``crfmap infer`` on a tiny grid with every schedule, in float64 and float32 and with ``--margin``;
 :func:`crfmap.crf.inference.lbp.infer` on a grid large enough for the parallel pass; the grid builder and the
 online mapper on a few synthetic scans; the simulator with every drive and with noise; the benchmarks'
-bandwidth kernel. That compiles
+bandwidth kernel; the background chapter's Gibbs sampler. That compiles
 (or loads) them into the cache every entry point of the environment shares (``NUMBA_CACHE_DIR``, set
 for the shell by make, for the command line by the venv's ``crfmap_numba_cache.pth`` and for Jupyter by
 the kernel spec; see the Makefile). Compiling is single-threaded, so the tasks are shared out over
@@ -35,7 +35,8 @@ KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
 NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
-                 "assess/scansplit.py", "assess/block_bootstrap.py")
+                 "assess/scansplit.py", "assess/block_bootstrap.py",
+                 "experiments/background.py")
 
 
 def cache_dir() -> Path | None:
@@ -217,6 +218,13 @@ def _scoring():
     score(split, {"raw": split.raw_probability()}, n_boot=2, block=1)
 
 
+def _gibbs():
+    """The background chapter's Gibbs sampler (notebook 01): chains and lattices share one kernel."""
+    from crfmap.experiments.background import gibbs_ising
+
+    gibbs_ising((3, 4), coupling=0.5, sweeps=1, chains=2)
+
+
 # name -> (callable, seconds it took on an empty cache on 2 busy cores; to share the tasks out, longest first).
 # The parallel pass (the large grids) is the costliest kernel: float64 and float32 go to different processes.
 TASKS = {  # name: (task, its seconds with an empty cache: the estimate that shares them out, measured)
@@ -225,12 +233,13 @@ TASKS = {  # name: (task, its seconds with an empty cache: the estimate that sha
     "flooding": (_schedule("flooding"), 3.5),
     "sweep": (_schedule("sweep"), 2.5),
     "thesis": (_schedule("thesis"), 4.0),
-    "large grids float64": (_large_grid("float64"), 23.0),
-    "large grids float32": (_large_grid("float32"), 22.0),
+    "large grids float64": (_large_grid("float64"), 32.0),
+    "large grids float32": (_large_grid("float32"), 31.5),
     "mapping": (_mapping, 5.0),
     "simulator": (_simulator, 4.5),
     "bandwidth": (_bandwidth, 0.5),
     "scoring": (_scoring, 1.5),
+    "gibbs": (_gibbs, 0.5),
 }
 
 

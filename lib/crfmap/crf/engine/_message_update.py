@@ -32,9 +32,24 @@ live in :mod:`crfmap.crf.engine.packed`.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.extending import overload
 
 FASTMATH = {"nnan", "ninf", "nsz", "contract"}  # no NaN/inf ever occur (floors); lets min/max vectorise
+# ``act`` of a pass in which every cell may send: its dtype (bool, where a mask is uint8) tells the kernels at
+# compile time, so a first call compiles the row loops of its case only (whole grid or bounded), not all five
+NO_MASK = np.zeros((2, 1, 1), np.bool_)
+
+
+def _masked(act):
+    """Whether ``act`` is a mask (uint8) rather than :data:`NO_MASK` (bool); a constant where compiled."""
+    return act.dtype == np.uint8
+
+
+@overload(_masked, inline="always")
+def _masked_compiled(act):
+    masked = isinstance(act, types.Array) and act.dtype == types.uint8
+    return (lambda act: True) if masked else (lambda act: False)
 
 
 # --- one cell, the four messages -------------------------------------------------------------
@@ -75,25 +90,42 @@ def _dp(new, old, one):
 # --- one row of one colour ---------------------------------------------------------------------
 
 
-@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
-def _send(msg, un, act, use_act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
+def _send(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
     """Cells k0 <= k < k0 + n of colour c in row y send (all have east and west neighbours).
 
     With ``measure`` the largest change per column is max-accumulated into ``cb[ty]``; ``w_n``,
     ``w_s`` (1 or 0) drop the north/south message of the top/bottom row, which goes nowhere.
     Indices are unsigned and arrays are not sliced: both keep the loops vectorised and cheap
-    to enter (rows of a small region are short).
+    to enter (rows of a small region are short). Compiled, ``act``'s type picks the rows
+    (:func:`_send_compiled`); this is the same choice in plain Python (``NUMBA_DISABLE_JIT``).
     """
-    o = 1 - c
-    y1 = y + 1
-    j0 = np.uint64(k0 + 1)  # stored column of cell k0 (column 0 is a ghost)
-    e0 = j0 + np.uint64((y + c) & 1)  # its east neighbour's column in the other plane
-    w0 = e0 - np.uint64(1)  # its west neighbour's
+    send = _send_masked if _masked(act) else _send_whole
+    send(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty)
+
+
+@overload(_send)
+def _send_compiled(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
+    # chosen while typing: a pass compiles (and a first call waits for) the row loops of its case only
+    return _send_masked if isinstance(act, types.Array) and act.dtype == types.uint8 else _send_whole
+
+
+@njit(inline="always", cache=True)
+def _row_columns(c, y, k0):
+    """(the other colour, the stored row, the stored column of cell k0 (column 0 is a ghost), its east and its
+    west neighbour's column in the other plane) of a row's cells from k0 on."""
+    j0 = np.uint64(k0 + 1)
+    e0 = j0 + np.uint64((y + c) & 1)
+    return 1 - c, y + 1, j0, e0, e0 - np.uint64(1)
+
+
+def _send_whole(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
+    """:func:`_send` where every cell may send."""
+    o, y1, j0, e0, w0 = _row_columns(c, y, k0)
     a0, a1, a2, a3 = co[0], co[1], co[2], co[3]
     b0, b1, b2, b3 = co[4], co[5], co[6], co[7]
     one = co[8]
     zero = one - one
-    if not use_act and not measure and co[9] == zero:
+    if not measure and co[9] == zero:
         # the hot loop: a table with positive entries never sends a message outside [lo, hi]
         for i in range(n):
             ui = np.uint64(i)
@@ -104,7 +136,7 @@ def _send(msg, un, act, use_act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb,
             msg[o, 1, y1, w0 + ui] = mW
             msg[o, 2, y1 + 1, j] = mN
             msg[o, 3, y, j] = mS
-    elif not use_act and not measure:
+    elif not measure:
         for i in range(n):
             ui = np.uint64(i)
             j = j0 + ui
@@ -114,7 +146,7 @@ def _send(msg, un, act, use_act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb,
             msg[o, 1, y1, w0 + ui] = mW
             msg[o, 2, y1 + 1, j] = mN
             msg[o, 3, y, j] = mS
-    elif not use_act:
+    else:
         for i in range(n):
             ui = np.uint64(i)
             j = j0 + ui
@@ -130,7 +162,16 @@ def _send(msg, un, act, use_act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb,
             msg[o, 3, y, j] = mS
             cc = cb[ty, j]
             cb[ty, j] = cc + max(d - cc, zero)  # max(cc, d) without a masked store (slow on AMD)
-    elif not measure:  # bounded LBP: the measured loop apart, and every old message loaded first (then it vectorises;
+
+
+def _send_masked(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
+    """:func:`_send` in bounded LBP: only cells with ``act`` 1 send, the others' messages keep their values."""
+    o, y1, j0, e0, w0 = _row_columns(c, y, k0)
+    a0, a1, a2, a3 = co[0], co[1], co[2], co[3]
+    b0, b1, b2, b3 = co[4], co[5], co[6], co[7]
+    one = co[8]
+    zero = one - one
+    if not measure:  # bounded LBP: the measured loop apart, and every old message loaded first (then it vectorises;
         # a select between the new value and a load of the old one did not: bounded passes 1.6x slower; nor did
         # this body as an inlined helper shared with the measured loop below: 29 vs 17 ms a pass)
         for i in range(n):
@@ -173,13 +214,13 @@ def _send(msg, un, act, use_act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb,
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _cell(msg, un, act, use_act, c, y, k, h, w, co, lo, hi):
+def _cell(msg, un, act, c, y, k, h, w, co, lo, hi):
     """One cell sends, whatever neighbours it has (grid edges); returns the largest change."""
     off = (y + c) & 1
     x = 2 * k + off
     o = 1 - c
     one = co[8]
-    if use_act and act[c, y + 1, k + 1] == 0:
+    if _masked(act) and act[c, y + 1, k + 1] == 0:
         return one - one
     mE, mW, mN, mS = _four(un[c, y + 1, k + 1], msg[c, 0, y + 1, k + 1], msg[c, 1, y + 1, k + 1],
                            msg[c, 2, y + 1, k + 1], msg[c, 3, y + 1, k + 1],
@@ -201,7 +242,7 @@ def _cell(msg, un, act, use_act, c, y, k, h, w, co, lo, hi):
 
 
 @njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
-def _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty):
+def _segment(msg, un, act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty):
     """Cells k0 <= k < k1 of colour c in row y send; measured changes go to ``cb[ty, k + 1]``."""
     if k1 <= k0:
         return
@@ -215,29 +256,29 @@ def _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb,
         first = 1 if (off == 0 and k0 == 0) else 0
         last = 1 if 2 * (k1 - 1) + off == w - 1 else 0
         if first == 1:
-            d = _cell(msg, un, act, use_act, c, y, k0, h, w, co, lo, hi)
+            d = _cell(msg, un, act, c, y, k0, h, w, co, lo, hi)
             cb[ty, k0 + 1] = max(cb[ty, k0 + 1], d)
         if last == 1 and (k1 - 1 > k0 or first == 0):
-            d = _cell(msg, un, act, use_act, c, y, k1 - 1, h, w, co, lo, hi)
+            d = _cell(msg, un, act, c, y, k1 - 1, h, w, co, lo, hi)
             cb[ty, k1] = max(cb[ty, k1], d)
         w_n = one if y + 1 < h else zero
         w_s = one if y > 0 else zero
     n = k1 - last - (k0 + first)
     if n > 0:  # one call site: the row loops are inlined (and compiled) once
-        _send(msg, un, act, use_act, c, y, k0 + first, n, co, lo, hi, measure, w_n, w_s, cb, ty)
+        _send(msg, un, act, c, y, k0 + first, n, co, lo, hi, measure, w_n, w_s, cb, ty)
 
 
 # not inlined: both trapezoids call this one compiled row (a function call per row costs nothing next to
 # a row's cells, while inlining it twice doubled the kernels' compile time, the first call's wait)
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb):
+def _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb):
     """Colour c of row y sends: the cells of the row's active segments (one row of a half-sweep)."""
     ty = y // tile_h
     off = (y + c) & 1
     for s in range(nseg[ty]):
         k0 = max((segs[ty, s, 0] - off + 1) >> 1, lo_k[c, y])
         k1 = min((segs[ty, s, 1] - off + 1) >> 1, hi_k[c, y])
-        _segment(msg, un, act, use_act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty)
+        _segment(msg, un, act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty)
 
 
 # --- passes ----------------------------------------------------------------------------------
@@ -248,7 +289,7 @@ def _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi,
+def _band_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi,
                     phases, measure_from, cb, first_phase):
     """Stage 1 of a pass on rows [y0, y1): phase j covers rows shrunk by j at inner edges.
 
@@ -264,17 +305,17 @@ def _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w,
             hi_row = y1 - j if y1 < yhi else yhi
             if y < lo_row or y >= hi_row:
                 continue
-            _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+            _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
                        (j >> 1) >= measure_from, cb)
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edge, ylo, yhi,
+def _gap_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edge, ylo, yhi,
                    phases, measure_from, cb):
     """Stage 2: the inverted trapezoid around the band edge ``edge``, rows [edge - j, edge + j)."""
     for j in range(1, phases):
         for y in range(max(edge - j, ylo), min(edge + j, yhi)):
-            _phase_row(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+            _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
                        (j >> 1) >= measure_from, cb)
 
 
@@ -282,7 +323,7 @@ def _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, 
 # region to run faster than the same functions called directly (measured: 1.4-1.8x at 512^2, 1.07x at 2048^2);
 # one parallel loop for both stages (not one each): its compile, the first call's wait, is a third shorter
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-def _pass(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations, measure_from, cb,
+def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations, measure_from, cb,
           first_phase, stage):
     """Stage ``stage`` of ``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
@@ -295,10 +336,10 @@ def _pass(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, h
     nb = edges.shape[0] - 1
     for b in prange(nb - stage):
         if stage == 0:
-            _band_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b],
+            _band_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b],
                             edges[b + 1], edges[0], edges[nb], phases, measure_from, cb, first_phase)
         else:
-            _gap_trapezoid(msg, un, act, use_act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b + 1],
+            _gap_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b + 1],
                            edges[0], edges[nb], phases, measure_from, cb)
     return 0
 

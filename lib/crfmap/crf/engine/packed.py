@@ -21,7 +21,7 @@ from crfmap.crf.engine._layout import (
     _pack_unary,
     _unpack_messages,
 )
-from crfmap.crf.engine._message_update import _pass, _tile_max
+from crfmap.crf.engine._message_update import NO_MASK, _pass, _tile_max
 from crfmap.crf.threads import over_rows, run_all
 
 PASS_ITERATIONS = 16  # iterations per pass at most (temporal blocking depth): the message change is measured
@@ -281,7 +281,7 @@ class PackedBlock:
         n_ty, n_tx = self.tile_shape()
         cb = np.zeros((n_ty, self.msg.shape[3]), self.dtype)
         measure_from = iterations - 1 if measure else iterations
-        args = (self.msg, self.un, self.act, self.use_act, self.lo_k, self.hi_k, segs, nseg, TILE_ROWS,
+        args = (self.msg, self.un, self.act if self.use_act else NO_MASK, self.lo_k, self.hi_k, segs, nseg, TILE_ROWS,
                 self.h, self.w, self.co, self.lo, self.hi)
         if self.first_phase and (iterations < 2 or active is not None or self.use_act):
             raise ValueError("the pass after start_uniform must run at least two iterations of the whole grid")
