@@ -18,9 +18,15 @@ venv: $(STAMP)
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	# --no-compile: Python writes the bytecode of the modules a run imports, on first import; compiling every
-	# installed module up front (Jupyter's whole stack) took 35 of the install's 85 s
-	$(BIN)/python -m pip install --quiet --no-compile -e ".[test]"
+	# first what the numba warm-up imports; it then compiles on the core pip leaves idle while pip installs the rest
+	# (best effort: if it fails, `make warm` compiles what it missed). --no-compile: Python writes the bytecode of
+	# the modules a run imports, on first import; compiling every installed module up front took 35 of pip's 85 s
+	$(BIN)/python -m pip install --quiet --no-compile $$($(BIN)/python lib/crfmap/repro/warmup.py --requirements)
+	PYTHONPATH=lib $(BIN)/python -m crfmap.repro.warmup --jobs $(CORES) > $(VENV)/early-warmup.log 2>&1 & early=$$!; \
+	  $(BIN)/python -m pip install --quiet --no-compile -e ".[test]"; status=$$?; \
+	  if [ $$status != 0 ]; then kill $$early 2>/dev/null; fi; \
+	  wait $$early || echo "note: the numba warm-up during the install stopped early ($(VENV)/early-warmup.log)"; \
+	  exit $$status
 	# the Jupyter kernel and the venv's interpreter use the numba cache the make targets warm
 	$(BIN)/python -m ipykernel install --sys-prefix --name python3 --env NUMBA_CACHE_DIR "$(NUMBA_CACHE_DIR)" >/dev/null
 	echo "import os; os.environ.setdefault('NUMBA_CACHE_DIR', '$(NUMBA_CACHE_DIR)')" > \

@@ -31,3 +31,46 @@ def test_every_module_with_cached_numba_kernels_is_watched():
     kernels = {p.resolve() for p in warmup.LIBRARY.rglob("*.py")
                if "cache=True" in p.read_text() and p.name != "_numba_cache.py"}
     assert kernels and kernels <= watched, sorted(str(p) for p in kernels - watched)
+
+
+def test_the_warm_up_runs_with_only_the_distributions_installed_first():
+    """`make venv` installs warmup.NEEDS, then warms the cache while pip installs the rest: every task must run
+    with the other distributions absent (here their imports fail, as they would before pip writes them)."""
+    import json
+    import subprocess
+    import sys
+    from importlib import metadata
+
+    from packaging.requirements import Requirement
+
+    def closure(names):  # the distributions pip installs with these (their requirements on this platform)
+        seen, todo = set(), [n.lower() for n in names]
+        while todo:
+            name = todo.pop()
+            if name in seen:
+                continue
+            seen.add(name)
+            for req in map(Requirement, metadata.requires(name) or []):
+                if req.marker is None or req.marker.evaluate({"extra": ""}):
+                    todo.append(req.name.lower().replace("_", "-"))
+        return seen
+
+    code = ("import json, sys, importlib.metadata as md\n"
+            "allowed = set(json.loads(sys.argv[1])) | {'crfmap'}\n"
+            "owners = md.packages_distributions()\n"
+            "class NotInstalledYet:\n"
+            "    def find_spec(self, name, path=None, target=None):\n"
+            "        dists = {d.lower().replace('_', '-') for d in owners.get(name.split('.')[0], [])}\n"
+            "        if dists and not dists & allowed:\n"
+            "            blocked.add(name.split('.')[0])\n"
+            "            raise ModuleNotFoundError(f'{name} is not installed yet')\n"
+            "blocked = set()\n"
+            "sys.meta_path.insert(0, NotInstalledYet())\n"
+            "from crfmap.repro import warmup\n"
+            "warmup.run_tasks(list(warmup.TASKS))\n"
+            "print(json.dumps(sorted(blocked)))\n")
+    run = subprocess.run([sys.executable, "-c", code, json.dumps(sorted(closure(warmup.NEEDS)))],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    print("imports refused, and survived:", run.stdout.strip().splitlines()[-1])  # optional ones (numba's cffi)
+    assert [r.split(">")[0] for r in warmup.requirements()] == list(warmup.NEEDS)

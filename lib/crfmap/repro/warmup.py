@@ -29,6 +29,9 @@ import tempfile
 import time
 from pathlib import Path
 
+# the distributions the tasks import (tests/repro/test_warmup.py checks it): `make venv` installs these first, then
+# warms the cache while pip installs the rest (run as a script, ``--requirements`` names them with pyproject's versions)
+NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm")
 # numba modules with cache=True the LBP calls use
 KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf/engine/messages.py",
                   "crf/inference/_plain_kernels.py")
@@ -37,6 +40,23 @@ LIBRARY = Path(__file__).resolve().parents[1]
 NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
                  "assess/scansplit.py", "assess/block_bootstrap.py",
                  "experiments/background.py")
+
+
+def requirements(pyproject=LIBRARY.parents[1] / "pyproject.toml") -> list[str]:
+    """The requirement strings of :data:`NEEDS` as ``pyproject`` states them (one place for the versions).
+
+    >>> [r.split(">")[0] for r in requirements()]
+    ['numpy', 'numba', 'pyyaml', 'pillow', 'tqdm']
+    """
+    import re
+    import tomllib
+
+    declared = tomllib.loads(Path(pyproject).read_text())["project"]["dependencies"]
+    by_name = {re.match(r"[A-Za-z0-9._-]+", r).group(0).lower().replace("_", "-"): r for r in declared}
+    missing = [n for n in NEEDS if n not in by_name]
+    if missing:
+        raise ValueError(f"{pyproject}: no dependency named {', '.join(missing)} (warmup.NEEDS)")
+    return [by_name[n] for n in NEEDS]
 
 
 def cache_dir() -> Path | None:
@@ -314,7 +334,12 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=None, help="processes compiling at once (default: the cores, <= 4)")
     parser.add_argument("--force", action="store_true", help="run even if the cache is warm")
     parser.add_argument("--worker", nargs="*", metavar="TASK", help=argparse.SUPPRESS)  # one process's share
+    parser.add_argument("--requirements", action="store_true",
+                        help="print the requirements the warm-up imports (works before they are installed)")
     args = parser.parse_args(argv)
+    if args.requirements:
+        print(" ".join(requirements()))
+        return 0
     if args.worker is not None:
         print(json.dumps(run_tasks(args.worker)))
         return 0
