@@ -19,11 +19,11 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	# first what the numba warm-up imports; it then compiles on the core pip leaves idle while pip installs the rest
-	# (best effort: if it fails, `make warm` compiles what it missed). --no-compile: Python writes the bytecode of
-	# the modules a run imports, on first import; compiling every installed module up front took 35 of pip's 85 s
-	$(BIN)/python -m pip install --quiet --no-compile $$($(BIN)/python lib/crfmap/repro/warmup.py --requirements)
+	# (best effort: if it fails, `make warm` compiles what it missed). Not --no-compile: where PYTHONDONTWRITEBYTECODE
+	# is set (containers, CI) nothing would ever write the bytecode, and every process would compile its imports
+	$(BIN)/python -m pip install --quiet $$($(BIN)/python lib/crfmap/repro/warmup.py --requirements)
 	PYTHONPATH=lib $(BIN)/python -m crfmap.repro.warmup --jobs $(CORES) > $(VENV)/early-warmup.log 2>&1 & early=$$!; \
-	  $(BIN)/python -m pip install --quiet --no-compile -e ".[test]"; status=$$?; \
+	  $(BIN)/python -m pip install --quiet -e ".[test]"; status=$$?; \
 	  if [ $$status != 0 ]; then kill $$early 2>/dev/null; fi; \
 	  wait $$early || echo "note: the numba warm-up during the install stopped early ($(VENV)/early-warmup.log)"; \
 	  exit $$status
