@@ -22,7 +22,7 @@ $(STAMP): pyproject.toml
 	# (best effort: if it fails, `make warm` compiles what it missed). Not --no-compile: where PYTHONDONTWRITEBYTECODE
 	# is set (containers, CI) nothing would ever write the bytecode, and every process would compile its imports
 	$(BIN)/python -m pip install --quiet $$($(BIN)/python lib/crfmap/repro/warmup.py --requirements)
-	PYTHONPATH=lib $(BIN)/python -m crfmap.repro.warmup --jobs $(CORES) > $(VENV)/early-warmup.log 2>&1 & early=$$!; \
+	PYTHONPATH=lib nice -n 10 $(BIN)/python -m crfmap.repro.warmup --jobs $(CORES) > $(VENV)/early-warmup.log 2>&1 & early=$$!; \
 	  $(BIN)/python -m pip install --quiet -e ".[test]"; status=$$?; \
 	  if [ $$status != 0 ]; then kill $$early 2>/dev/null; fi; \
 	  wait $$early || echo "note: the numba warm-up during the install stopped early ($(VENV)/early-warmup.log)"; \
