@@ -8,10 +8,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-# a fresh-clone full run on 2 cores, 2026-12-03 11:15 [s]
-EXPECTED_SECONDS = {"01_background": 47, "02_worked_example": 19, "03_simulator": 31, "04_denoising": 36,
-                    "05_occlusion": 29, "06_enclosed": 38, "07_office": 68, "08_explorer": 7, "09_speed": 41,
-                    "10_beyond": 156}
+# a fresh-clone full run on 2 cores, 2026-12-03 13:31 [s]
+EXPECTED_SECONDS = {"01_background": 26, "02_worked_example": 19, "03_simulator": 29, "04_denoising": 44,
+                    "05_occlusion": 31, "06_enclosed": 35, "07_office": 75, "08_explorer": 9, "09_speed": 73,
+                    "10_beyond": 167}
 BENCHMARKS = {"09_speed"}  # notebooks that measure speed: each runs alone with every core (its numbers are timings)
 UNKNOWN_SECONDS = 1000  # a new notebook: assume it is long, so it starts early
 RECORD = Path("paper") / "generated" / "reproduce_timings.json"
@@ -21,7 +21,7 @@ def expected_seconds(stems, root=".") -> dict:
     """``{notebook stem: seconds}`` for ``stems``, from ``root``'s last full run where it has one.
 
     >>> expected_seconds(["04_denoising", "99_new"], root="/nonexistent")
-    {'04_denoising': 36, '99_new': 1000}
+    {'04_denoising': 44, '99_new': 1000}
     """
     seconds = {stem: EXPECTED_SECONDS.get(stem, UNKNOWN_SECONDS) for stem in stems}
     try:

@@ -245,18 +245,19 @@ def _gibbs():
     gibbs_ising((3, 4), coupling=0.5, sweeps=1, chains=2)
 
 
-# name -> (callable, seconds it took on an empty cache on 2 busy cores; to share the tasks out, longest first).
+# name -> (callable, seconds it took on an empty cache on 2 busy cores, beside pip in make venv (2026-12-03);
+# the estimates that share the tasks out, longest first).
 # The parallel pass (the large grids) is the costliest kernel: float64 and float32 go to different processes.
 TASKS = {  # name: (task, its seconds with an empty cache: the estimate that shares them out, measured)
-    "checkerboard float64": (_checkerboard("float64"), 9.0),
-    "checkerboard float32": (_checkerboard("float32"), 9.5),
-    "flooding": (_schedule("flooding"), 3.5),
-    "sweep": (_schedule("sweep"), 2.5),
-    "thesis": (_schedule("thesis"), 4.0),
-    "large grids float64": (_large_grid("float64"), 32.0),
-    "large grids float32": (_large_grid("float32"), 31.5),
-    "mapping": (_mapping, 5.0),
-    "simulator": (_simulator, 4.5),
+    "checkerboard float64": (_checkerboard("float64"), 18.5),
+    "checkerboard float32": (_checkerboard("float32"), 19.5),
+    "flooding": (_schedule("flooding"), 0.1),
+    "sweep": (_schedule("sweep"), 3.0),
+    "thesis": (_schedule("thesis"), 4.5),
+    "large grids float64": (_large_grid("float64"), 51.5),
+    "large grids float32": (_large_grid("float32"), 50.0),
+    "mapping": (_mapping, 10.0),
+    "simulator": (_simulator, 9.5),
     "bandwidth": (_bandwidth, 0.5),
     "scoring": (_scoring, 1.5),
     "gibbs": (_gibbs, 0.5),
@@ -267,7 +268,7 @@ def share(tasks, jobs: int) -> list[list[str]]:
     """Tasks in ``jobs`` groups of about equal estimated seconds (longest first, each to the lightest group).
 
     >>> share(["flooding", "sweep", "thesis"], 2)
-    [['thesis'], ['flooding', 'sweep']]
+    [['thesis'], ['sweep', 'flooding']]
     """
     groups = [[] for _ in range(max(1, int(jobs)))]
     load = [0.0] * len(groups)
