@@ -35,3 +35,17 @@ def test_link_unary_and_coefficients():
     assert link_unary(np.array([0.0]), [[1, 0], [1, 0]])[0] == 0.5
     c = message_coefficients(np.array([[[10, 1], [1, 10]]]))
     assert c.tolist() == [[10, 1, 11, 11]]
+
+
+@pytest.mark.parametrize("link", [[[1, 0], [0, 1]], [[0.9, 0.2], [0.1, 0.8]], [[1, 0], [1, 0]], [[0, 2], [0, 3]]])
+def test_link_unary_of_a_grid_is_bit_for_bit_the_elementwise_formula(link):
+    p = np.random.default_rng(5).uniform(0.0, 1.0, (67, 41))
+    p[0, :3], p[1, :3] = 0.0, 1.0
+    t = np.asarray(link, float)
+    occ, emp = t[0, 0] * p + t[0, 1] * (1.0 - p), t[1, 0] * p + t[1, 1] * (1.0 - p)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        expected = np.where(occ + emp > 0, occ / (occ + emp), 0.5)
+    grid = link_unary(p, link)
+    assert grid.dtype == np.float64 and np.array_equal(grid, expected)
+    assert np.array_equal(link_unary(p.ravel(), link), expected.ravel())  # the NumPy path, other shapes
+    assert np.array_equal(link_unary(np.asfortranarray(p), link), expected)
