@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 
 DEFAULT_HIDDEN = np.array([[10.0, 1.0], [1.0, 10.0]])
@@ -123,8 +124,6 @@ def link_unary(observed, link) -> np.ndarray:
     link = check_table(link, "link")
     p = np.asarray(observed, dtype=np.float64)
     if p.ndim == 2 and p.size:  # a grid: one pass over rows in bands (NumPy's eight temporaries cost 10x more)
-        from crfmap.crf.threads import over_rows
-
         out = np.empty(p.shape)
         over_rows(_link_unary_rows, p.shape[0], np.ascontiguousarray(p), link, out)
         return out
