@@ -3,7 +3,9 @@ red/black odds planes of :mod:`crfmap.crf.engine._message_update` (private; used
 
 Kernels over rows take the band ``[r0, r1)`` of rows they do last and release the GIL, so
 :func:`crfmap.crf.threads.over_rows` runs bands on threads (compiling serial loops is two to
-three times faster than numba's parfor).
+three times faster than numba's parfor). All take ``error_model="numpy"``: under numba's default every
+division checks for a zero divisor (to raise ZeroDivisionError), so no loop with one vectorises (the beliefs
+3.5 ns a cell, not memory-bound); a zero divisor gives inf or NaN, as in NumPy.
 """
 from __future__ import annotations
 
@@ -14,7 +16,7 @@ from numba import njit
 # --- layout conversion -------------------------------------------------------------------------
 
 
-@njit(inline="always", cache=True)
+@njit(inline="always", cache=True, error_model="numpy")
 def unary_odds(p, link, floor):
     """Odds of the message an observation P(occupied) = p sends through ``link`` (floored).
 
@@ -27,7 +29,7 @@ def unary_odds(p, link, floor):
     return min(max(r, 1.0 / hi), hi)
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _pack_unary(prob, y0, x0, h, w, link, floor, un, r0, r1):
     """Observation odds of cells [y0, y0 + h) x [x0, x0 + w) of ``prob`` into planes ``un``."""
     for y in range(r0, r1):
@@ -37,7 +39,7 @@ def _pack_unary(prob, y0, x0, h, w, link, floor, un, r0, r1):
                 un[c, y + 1, k] = unary_odds(prob[y0 + y, x0 + 2 * k - 2 + off], link, floor)
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _pack_messages(msg_p, y0, x0, h, w, floor, out, r0, r1):
     """Probability messages [4, y, x] of the block into odds planes ``out`` (floored).
 
@@ -57,7 +59,7 @@ def _pack_messages(msg_p, y0, x0, h, w, floor, out, r0, r1):
                 out[c, d, y + 1, (x >> 1) + 1] = r
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _unpack_messages(packed, y0, x0, h, w, act, use_act, out, r0, r1):
     """Odds planes back into probability messages ``out[4, y0 + y, x0 + x]``.
 
@@ -77,7 +79,7 @@ def _unpack_messages(packed, y0, x0, h, w, act, use_act, out, r0, r1):
                 out[d, y0 + y, x0 + x] = r / (1.0 + r)
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _beliefs_packed(un, packed, h, w, out, r0, r1):
     """P(occupied) of every cell of the block: observation odds times its four message odds."""
     for y in range(r0, r1):
@@ -98,7 +100,7 @@ def _beliefs_packed(un, packed, h, w, out, r0, r1):
             out[y, w - 1] = b / (1.0 + b)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _active_extents(act, h, w, lo_k, hi_k):
     """Per colour and row, the plane-index range [lo, hi) holding its active cells."""
     for c in range(2):
@@ -116,14 +118,14 @@ def _active_extents(act, h, w, lo_k, hi_k):
             hi_k[c, y] = hi
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _fill_ones(rows, r0, r1):
     """rows[r0:r1, :] = 1 (``rows``: planes seen as rows; on threads, so each first touches its share of fresh memory)."""
     for i in range(r0, r1):
         rows[i, :] = 1
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _pack_clamped(state, implied_odds, msg, act, r0, r1):
     """Cells with ``state`` >= 0 (certain) stop sending (``act`` 0) and their four messages become
     ``implied_odds[d, state]``; the others send (``act`` 1). Whole grid, as :func:`crfmap.crf.model.evidence.clamp_messages`."""
@@ -144,21 +146,22 @@ def _pack_clamped(state, implied_odds, msg, act, r0, r1):
                 msg[(x + y - 1) & 1, 3, y, (x >> 1) + 1] = implied_odds[3, s]
 
 
-@njit(nogil=True, cache=True)
+@njit(nogil=True, cache=True, error_model="numpy")
 def _pack_mask(mask, y0, x0, h, w, out, r0, r1):
     for y in range(r0, r1):
         for x in range(w):
             out[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if mask[y0 + y, x0 + x] else 0
 
 
-@njit(inline="always", cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})
+@njit(inline="always", cache=True, fastmath={"nnan", "ninf", "nsz", "contract"}, error_model="numpy")
 def _uniform_send(U, a0, a1, a2, a3, lo, hi, clamp):
     """Odds a cell with observation odds U and uniform incoming messages sends through table a."""
     m = (a0 * U + a1) / (a2 * U + a3)
     return min(max(m, lo), hi) if clamp else m
 
 
-@njit(cache=True)  # not inlined: one compiled row for the three calls below (a call per row costs nothing)
+# not inlined: one compiled row for the three calls below (a call per row costs nothing)
+@njit(cache=True, error_model="numpy")
 def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, r0, r1, un):
     """Row y: its observation odds into ``un`` if the block [r0, r1) owns it, and into scratch row s of
     ``fa`` / ``fb`` what its red cells send from uniform messages (red plane indices, 1 at the ghosts);
@@ -194,7 +197,7 @@ def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, r0, r1, un):
     return bad, certain
 
 
-@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "contract"})  # not inlined: keeps its own flags
+@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "contract"}, error_model="numpy")  # not inlined: keeps its own flags
 def _uniform_sends(fu, fa, fb, off, n, co, lo, hi):
     """fa[k], fb[k]: what red cell k (x = 2 k - 2 + off) sends through the E/N and W/S tables; 1 elsewhere."""
     clamp = co[9] != 0
@@ -210,7 +213,7 @@ def _uniform_sends(fu, fa, fb, off, n, co, lo, hi):
         fb[k] = one
 
 
-@njit(nogil=True, cache=True)  # no fastmath: the grid check must see NaN
+@njit(nogil=True, cache=True, error_model="numpy")  # no fastmath: the grid check must see NaN
 def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats, b):
     """Whole grid from uniform messages in one trip through memory: observation odds into ``un``,
     and the first half-sweep (red cells send; with uniform incoming messages they depend on the
