@@ -40,7 +40,7 @@ def test_goals_rows_in_order_with_their_goals():
          "seconds": 0.1234, "goal_seconds": 0.2685},
         {"method": "preset-converge", "map": "aces", "seconds": None, "note": "skipped: aces missing"},
     ]
-    rows = tables.goals_rows(records, start_goal=1.0, converge_goal=2.0)
+    rows = tables.goals_rows(records, start_goal=1.0)
     assert [r[1] for r in rows[:2]] == ["512^2", "1024^2"]  # by size
     assert rows[0] == ["infer() end to end / kernel, float32, 2 threads, 10 it. per call", "512^2", 0.85, ">= 0.8"]
     assert rows[2] == ["kernel, float32, 1 thread [Mcell/s]", "512^2", 322, ">= 300"]
@@ -54,7 +54,7 @@ def test_goals_rows_in_order_with_their_goals():
 
 def test_goals_rows_give_the_empty_cache_first_call_against_its_goal():
     records = [{"method": "start-cold", "seconds": 18.04, "minus_warm_seconds": 17.2, "goal_seconds": 20.0}]
-    rows = tables.goals_rows(records, start_goal=2.0, converge_goal=1.0)
+    rows = tables.goals_rows(records, start_goal=2.0)
     assert rows == [["crfmap infer, first call with an empty cache [s]", "512^2", 18.0, "<= 20"],
                     ["crfmap infer: empty cache minus warm [s]", "512^2", 17.2, "(compiling)"]]
 
@@ -70,3 +70,27 @@ def test_throughput_rows_pick_the_reported_sizes_and_relate_to_baseline_and_boun
     assert rows[0] == ["crfmap, 1 thread", "256^2", 20.0, 4.0, 0.2, "not reported"]
     assert rows[4] == ["time to converge (<1e-4), 40 it.", "512^2", 0.123, None, None, "not reported"]
     assert rows[5] == ["peak memory of infer(), bytes per cell", "1024^2", 12.3, None, None, "not reported"]
+
+
+def test_a_goal_row_of_the_kernel_is_followed_by_its_division_ceiling():
+    records = [{"method": "kernel-vs-bound", "size": 512, "threads": 1, "goal_ratio": None, "ratio_to_bound": 0.5,
+                "goal_mcells_per_second": 1000, "kernel_mcells_per_second": 417.2,
+                "division_ceiling_mcells_per_second": 905.6},
+               {"method": "kernel-vs-bound", "size": 256, "threads": 1, "goal_ratio": None, "ratio_to_bound": 0.5,
+                "goal_mcells_per_second": None, "kernel_mcells_per_second": 400.0,
+                "division_ceiling_mcells_per_second": 905.6}]  # no goal at this size: no row
+    rows = tables.goals_rows(records, start_goal=1.0)
+    assert rows[:2] == [["kernel, float32, 1 thread [Mcell/s]", "512^2", 417, ">= 1000"],
+                        ["division ceiling, float32, 1 thread(s): the kernel's rate if it only did its 4 divisions "
+                         "a cell [Mcell/s]", "512^2", 906, "(information)"]]
+    assert len([r for r in rows if r[0].startswith("division ceiling")]) == 1
+
+
+def test_the_thesis_tables_convergence_rows_are_information_not_goals():
+    records = [{"method": "converge-start", "size": 4096, "start": "uniform", "seconds_to_converge": 2.18,
+                "iterations": 817, "threads": 2, "runs": 1, "first_run_seconds": 2.2}]
+    rows = tables.goals_rows(records, start_goal=1.0)
+    assert rows[0] == ["converge, uniform start, 817 it., 2 threads, best of 1 [s]", "4096^2", 2.18,
+                       "(information: the thesis's table)"]
+    from crfmap.repro.paper import missed_goals
+    assert missed_goals(["measurement", "grid", "value", "goal"], rows) == "none"

@@ -18,6 +18,8 @@ Methods:
 - ``crfmap-plain``: the reference kernels (:mod:`crfmap.crf.inference._plain_kernels`), small grids only.
 - ``memory-bandwidth``: a streaming triad over 2 x 256 MB; ``bound_mcells_per_second`` is the
   rate at which one pass per iteration (36 bytes per cell in float32) would saturate it.
+  ``division-throughput``: float32 divisions per second; ``ceiling_mcells_per_second``, the kernel's rate if
+  it only did its four divisions a cell (:mod:`crfmap.bench.machine`).
 - ``converge``: noisy office floors (flip noise 0.2), table [[10, 1], [1, 10]], until the
   largest message change is below 1e-4: fast kernel with frozen tiles (default), exact
   (``freeze=0``), and the plain kernel on small grids, with the largest belief difference.
@@ -53,17 +55,16 @@ from crfmap.crf.engine.packed import PASS_ITERATIONS
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.schedules import Checkerboard
 from crfmap.bench.baseline import NumpyCheckerboard
+from crfmap.bench.machine import machine_rows
 from crfmap.bench.common import (
     SIZES,
     QUICK_SIZES,
     CONVERGE_SIZES,
     QUICK_CONVERGE_SIZES,
     CONVERGE_TOL,
-    BYTES_PER_CELL_PASS,
     GENERAL_TABLE,
     EXTERNAL_MAX_SIZE,
     bench_grid,
-    memory_bandwidth,
     record,
     median_time,
     with_threads,
@@ -302,19 +303,13 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         wanted = {kind for g in only for kind in GROUPS[g]}
         tasks = [(kind, size) for kind, size in _all_tasks(tasks, quick, sizes, converge_sizes) if kind in wanted]
     bar = tqdm(tasks, desc="bench", disable=not progress)
-    bounds = {}  # threads -> float32 one-pass bound [Mcell/s] of this run's bandwidth rows
+    bounds, ceilings = {}, {}  # threads -> float32 one-pass bound, division ceiling [Mcell/s] of this run
     for kind, size in bar:
         bar.set_postfix_str(f"{kind} {size or ''}".strip())
         if kind == "machine":
             yield agreement()
-            for th in threads:
-                bw = memory_bandwidth(th, bandwidth_mbytes or (64 if quick else 256))
-                bounds[th] = bw * 1e3 / BYTES_PER_CELL_PASS["float32"]
-                yield record("memory-bandwidth", None, None, th, None, gbytes_per_second=bw,
-                             mbytes_per_array=bandwidth_mbytes or (64 if quick else 256),
-                             bound_mcells_per_second={k: bw * 1e3 / v for k, v in BYTES_PER_CELL_PASS.items()},
-                             note="STREAM-style triad a = b + s c, 3 x 8 bytes per element counted "
-                             "(write-allocate traffic not counted)")
+            rows, bounds, ceilings = machine_rows(threads, bandwidth_mbytes or (64 if quick else 256))
+            yield from rows
         elif kind == "compile":
             if cold:
                 yield compile_seconds(cold=True)
@@ -335,7 +330,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             if goals:
                 yield G.infer_vs_kernel(fast[top], end_to_end)
                 for th in threads:
-                    yield G.kernel_vs_bound(fast[th], bounds.get(th))
+                    yield G.kernel_vs_bound(fast[th], bounds.get(th), ceilings.get(th))
             if size <= 512:
                 yield bench_plain(size, 1, top)
         elif kind == "converge":

@@ -73,7 +73,7 @@ def _explorer_and_reproduce_rows(records) -> list:
     return rows
 
 
-def goals_rows(records, start_goal, converge_goal) -> list:
+def goals_rows(records, start_goal) -> list:
     """Rows (measurement, grid, value, goal) of what users wait for (:mod:`crfmap.bench.goals`' records)."""
     rows = []
     for r in sorted(pick(records, "infer-vs-kernel"), key=lambda r: r["size"]):
@@ -86,12 +86,16 @@ def goals_rows(records, start_goal, converge_goal) -> list:
         if r["goal_mcells_per_second"] is not None:
             rows.append([f"kernel, float32, {r['threads']} thread [Mcell/s]", f"{r['size']}^2",
                          round(r["kernel_mcells_per_second"]), f">= {r['goal_mcells_per_second']:g}"])
+        ceiling = r.get("division_ceiling_mcells_per_second")
+        if ceiling and (r["goal_ratio"] is not None or r["goal_mcells_per_second"] is not None):
+            rows.append([f"division ceiling, float32, {r['threads']} thread(s): the kernel's rate if it only did "
+                         f"its 4 divisions a cell [Mcell/s]", f"{r['size']}^2", round(ceiling), "(information)"])
     rows += _start_rows(records, start_goal) + _explorer_and_reproduce_rows(records)
     for r in pick(records, "converge-start"):
         if r["seconds_to_converge"] is not None:
             rows.append([f"converge, {r['start']} start, {r['iterations']} it., {r['threads']} threads, best of "
                          f"{r['runs']} [s]", f"{r['size']}^2", round(r["seconds_to_converge"], 3),
-                         f"<= {converge_goal:g}"])
+                         "(information: the thesis's table)"])
             rows.append([f"converge, {r['start']} start: first run in the process (fresh buffers) [s]",
                          f"{r['size']}^2", round(r["first_run_seconds"], 3), ""])
         else:

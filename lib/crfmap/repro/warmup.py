@@ -38,6 +38,7 @@ KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
 NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
+                 "bench/machine.py",
                  "assess/scansplit.py", "assess/block_bootstrap.py",
                  "experiments/background.py")
 
@@ -220,10 +221,10 @@ def _simulator():
 
 
 def _bandwidth():
-    """The streaming-bandwidth kernel of the benchmarks (the speed notebook's and ``crfmap bench``'s bound)."""
-    from crfmap.bench.common import memory_bandwidth
+    """The machine rows' kernels of the benchmarks (the speed notebook's and ``crfmap bench``'s bound and ceiling)."""
+    from crfmap.bench.machine import machine_rows
 
-    memory_bandwidth(1, mbytes=1, repeats=1)
+    machine_rows((1,), mbytes=1)
 
 
 def _scoring():
