@@ -162,26 +162,29 @@ def _uniform_send(U, a0, a1, a2, a3, lo, hi, clamp):
 
 # not inlined: one compiled row for the three calls below (a call per row costs nothing)
 @njit(cache=True, error_model="numpy")
-def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, r0, r1, un):
+def _start_row(prob, y, link, floor, co, lo, hi, fu, fr, fa, fb, s, r0, r1, un):
     """Row y: its observation odds into ``un`` if the block [r0, r1) owns it, and into scratch row s of
     ``fa`` / ``fb`` what its red cells send from uniform messages (red plane indices, 1 at the ghosts);
     for an owned row, returns (cells outside [0, 1] or not finite, cells the link makes certain).
-    Unit-stride loops, so that they vectorise."""
+    Unit-stride loops, so that they vectorise (``fr``: the red cells' odds of a row the block does not own,
+    contiguous as in its red plane)."""
     own = r0 <= y < r1  # a bool argument passed as a literal would compile one copy per value
     w = prob.shape[1]
     wp = un.shape[2]
     one = co[8]
     bad = 0
     certain = 0
-    if own:
+    if own:  # the check and the odds in one loop: occ and emp computed once
         for x in range(w):
             p = prob[y, x]
             bad += np.int64(not ((p >= 0.0) & (p <= 1.0)))  # NaN fails both; & (not and): no branches
             occ = link[0] * p + link[1] * (1.0 - p)
             emp = link[2] * p + link[3] * (1.0 - p)
             certain += np.int64(((emp == 0.0) & (occ > 0.0)) | ((occ == 0.0) & (emp > 0.0)))
-    for x in range(w):
-        fu[x] = unary_odds(prob[y, x], link, floor)
+            fu[x] = unary_odds(p, link, floor)
+    else:
+        for x in range(w):
+            fu[x] = unary_odds(prob[y, x], link, floor)
     if own:
         for c in range(2):
             off = (y + c) & 1
@@ -191,21 +194,24 @@ def _start_row(prob, y, link, floor, co, lo, hi, fu, fa, fb, s, r0, r1, un):
                 un[c, y + 1, k] = fu[2 * k - 2 + off]
             for k in range(n + 1, wp):
                 un[c, y + 1, k] = one
-    off = y & 1
+    off = y & 1  # red cells: colour 0
     n = (w - off + 1) >> 1
-    _uniform_sends(fu, fa[s], fb[s], off, n, co, lo, hi)
+    if not own:
+        for k in range(1, n + 1):
+            fr[k] = fu[2 * k - 2 + off]
+    _uniform_sends(un[0, y + 1] if own else fr, fa[s], fb[s], n, co, lo, hi)
     return bad, certain
 
 
 @njit(cache=True, fastmath={"nnan", "ninf", "nsz", "contract"}, error_model="numpy")  # not inlined: keeps its own flags
-def _uniform_sends(fu, fa, fb, off, n, co, lo, hi):
-    """fa[k], fb[k]: what red cell k (x = 2 k - 2 + off) sends through the E/N and W/S tables; 1 elsewhere."""
+def _uniform_sends(red, fa, fb, n, co, lo, hi):
+    """fa[k], fb[k]: what red cell k (odds ``red[k]``, k = 1 .. n) sends through the E/N and W/S tables; 1 elsewhere."""
     clamp = co[9] != 0
     one = co[8]
     fa[0] = one
     fb[0] = one
     for k in range(1, n + 1):
-        u = fu[2 * k - 2 + off]
+        u = red[k]
         fa[k] = _uniform_send(u, co[0], co[1], co[2], co[3], lo, hi, clamp)
         fb[k] = _uniform_send(u, co[4], co[5], co[6], co[7], lo, hi, clamp)
     for k in range(n + 1, fa.shape[0]):
@@ -234,19 +240,20 @@ def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats, b):
     r0 = b * h // nblocks
     r1 = (b + 1) * h // nblocks
     fu = np.empty(w, un.dtype)  # one row of observation odds
+    fr = np.empty(wp, un.dtype)  # the red cells' odds of a row outside the block, as in its red plane
     fa = np.ones((3, wp + 1), un.dtype)  # [row % 3, red plane index]
     fb = np.ones((3, wp + 1), un.dtype)
     bad = 0
     certain = 0
     if r0 > 0:
-        _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fa, fb, (r0 - 1) % 3, r0, r1, un)
+        _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fr, fa, fb, (r0 - 1) % 3, r0, r1, un)
     if r0 < r1:
-        nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fa, fb, r0 % 3, r0, r1, un)
+        nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fr, fa, fb, r0 % 3, r0, r1, un)
         bad += nb
         certain += nc
     for y in range(r0, r1):
         if y + 1 < h:
-            nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fa, fb, (y + 1) % 3, r0, r1, un)
+            nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fr, fa, fb, (y + 1) % 3, r0, r1, un)
             bad += nb
             certain += nc
         # red cells' slots: the black cells send into all of them in the first half-sweep of the
