@@ -81,7 +81,7 @@ def test_a_goal_row_of_the_kernel_is_followed_by_its_division_ceiling():
                 "division_ceiling_mcells_per_second": 905.6}]  # no goal at this size: no row
     rows = tables.goals_rows(records, start_goal=1.0)
     assert rows[:2] == [["kernel, float32, 1 thread [Mcell/s]", "512^2", 417, ">= 1000"],
-                        ["division ceiling, float32, 1 thread(s): the kernel's rate if it only did its 4 divisions "
+                        ["division ceiling, float32, 1 thread: the kernel's rate if it only did its 4 divisions "
                          "a cell [Mcell/s]", "512^2", 906, "(information)"]]
     assert len([r for r in rows if r[0].startswith("division ceiling")]) == 1
 

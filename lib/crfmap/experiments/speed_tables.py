@@ -88,8 +88,9 @@ def goals_rows(records, start_goal) -> list:
                          round(r["kernel_mcells_per_second"]), f">= {r['goal_mcells_per_second']:g}"])
         ceiling = r.get("division_ceiling_mcells_per_second")
         if ceiling and (r["goal_ratio"] is not None or r["goal_mcells_per_second"] is not None):
-            rows.append([f"division ceiling, float32, {r['threads']} thread(s): the kernel's rate if it only did "
-                         f"its 4 divisions a cell [Mcell/s]", f"{r['size']}^2", round(ceiling), "(information)"])
+            threads = f"{r['threads']} thread" + ("s" if r["threads"] > 1 else "")
+            rows.append([f"division ceiling, float32, {threads}: the kernel's rate if it only did its 4 divisions "
+                         "a cell [Mcell/s]", f"{r['size']}^2", round(ceiling), "(information)"])
     rows += _start_rows(records, start_goal) + _explorer_and_reproduce_rows(records)
     for r in pick(records, "converge-start"):
         if r["seconds_to_converge"] is not None:
