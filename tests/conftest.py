@@ -1,6 +1,13 @@
 """Tests mirror the package (tests/crf/ for crfmap.crf, ...); the naive references stay here, importable from all
 (pyproject.toml's ``[tool.pytest.ini_options] pythonpath`` puts tests/ on the path)."""
+import signal
+
 import pytest
+
+# Under `nohup make test` SIGHUP arrives ignored and every child would inherit that: the signal tests (the hostile
+# catalogue's, tests/io/test_atomic_signals.py) send SIGHUP to see a command stop cleanly, so it gets its default back
+if signal.getsignal(signal.SIGHUP) is signal.SIG_IGN:
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
 # a two-scan CARMEN log that the command tests build maps from (tests/mapping, tests/test_cli_ros.py)
 CARMEN_LINES = [
