@@ -107,7 +107,8 @@ def kernel_vs_bound(kernel: dict, bound_mcells_per_second, ceiling_mcells_per_se
                   goal_mcells_per_second=(ONE_THREAD_GOAL if kernel["size"] == ONE_THREAD_GOAL_SIZE
                                           and kernel["threads"] == 1 else None),
                   division_ceiling_mcells_per_second=ceiling_mcells_per_second,
-                  ratio_to_division_ceiling=None if not ceiling_mcells_per_second else mcells / ceiling_mcells_per_second,
+                  ratio_to_division_ceiling=(None if not ceiling_mcells_per_second
+                                             else mcells / ceiling_mcells_per_second),
                   note="kernel per iteration over the one-pass bound of the memory-bandwidth row and over the "
                   "division ceiling, both with the same threads (same run)")
 
@@ -384,7 +385,8 @@ def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000, runs=2) -> li
                           runs=max(runs, 1), first_run_seconds=first,
                           tol=tol,
                           max_belief_difference_vs_uniform=float(np.abs(beliefs - plain_beliefs).max()),
-                          note="noisy office floor, [[10, 1], [1, 10]] (the thesis's table, its ordered phase): information, no goal (issue 22: the default preset's row is the convergence goal)"))
+                          note="noisy office floor, [[10, 1], [1, 10]] (the thesis's table, its ordered phase): "
+                          "information, no goal (issue 22: the default preset's row is the convergence goal)"))
     if option is None:
         out.append(record("converge-start", size, np.float32, threads, None, start="coarse", iterations=None,
                           seconds_to_converge=None, note="infer() has no coarse-to-fine start yet (looked for "
