@@ -1,12 +1,11 @@
-"""What every benchmark shares: the constants, the input grids, the machine's bandwidth, one record's keys,
-and the median timer. The suite (:mod:`crfmap.bench.suite`) and its rows (baseline, external, online)
+"""What every benchmark shares: the constants, the input grids, one record's keys and the median timer
+(the machine's limits: :mod:`crfmap.bench.machine`). The suite (:mod:`crfmap.bench.suite`) and its rows (baseline, external, online)
 import from here, never from each other."""
 from __future__ import annotations
 
 import time
 
 import numpy as np
-from numba import njit, prange
 
 SIZES = (256, 512, 1024, 2048, 4096, 8192)
 QUICK_SIZES = (128, 256)
@@ -21,7 +20,7 @@ EXTERNAL_MAX_SIZE = 512  # PGMax / PyMaxflow rows (when installed) up to this si
 ONLINE_MARGIN = 3  # [cells] the online run near observations only (OnlineMapper margin)
 
 
-# --- inputs and machine ---------------------------------------------------------------------------
+# --- inputs ---------------------------------------------------------------------------
 
 
 def bench_grid(size, seed=0, kind="uniform") -> np.ndarray:
@@ -39,32 +38,6 @@ def bench_grid(size, seed=0, kind="uniform") -> np.ndarray:
     side = max(size, 128)  # an office needs a few metres; small grids are a corner of one
     scene = office_floor(side * 0.05, side * 0.05, 0.05, seed=seed)
     return noisy_image(scene.truth, 0.2, seed=seed, model="flip").probability[:size, :size].copy()
-
-
-@njit(parallel=True, cache=True)
-def _triad(a, b, c, s):
-    for i in prange(a.shape[0]):
-        a[i] = b[i] + s * c[i]
-
-
-def memory_bandwidth(threads, mbytes=256, repeats=5) -> float:
-    """Streaming bandwidth [GB/s]: a = b + s c over float64 arrays of ``mbytes`` each (3 streams)."""
-    import numba
-
-    n = mbytes * (1 << 20) // 8
-    a, b, c = np.zeros(n), np.ones(n), np.ones(n)
-    previous = numba.get_num_threads()
-    numba.set_num_threads(threads)
-    try:
-        _triad(a, b, c, 0.5)
-        times = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            _triad(a, b, c, 0.5)
-            times.append(time.perf_counter() - t)
-    finally:
-        numba.set_num_threads(previous)
-    return 3 * a.nbytes / min(times) / 1e9
 
 
 # --- records ----------------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """What this machine can do at most, measured in the same run as the kernels (``crfmap bench``'s machine rows).
 
-- ``memory-bandwidth``: a streaming triad (:func:`crfmap.bench.common.memory_bandwidth`); its
+- ``memory-bandwidth``: a streaming triad (:func:`memory_bandwidth`); its
   ``bound_mcells_per_second`` is the rate at which one trip through memory per iteration would saturate it,
   the bound temporal blocking is measured against.
 - ``division-throughput``: float32 divisions per second with the operands in L1, each thread on its own
@@ -19,14 +19,40 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
-from crfmap.bench.common import BYTES_PER_CELL_PASS, memory_bandwidth, record
+from crfmap.bench.common import BYTES_PER_CELL_PASS, record
 from crfmap.crf.threads import run_all
 
 DIVISIONS_PER_CELL = 4  # a cell sends four messages, each one division (the kernel's docstring)
 _DIVISION_ELEMENTS = 2048  # per thread: 3 arrays of 8 KB, in L1
 _DIVISION_SWEEPS = 4000
+
+
+@njit(parallel=True, cache=True)
+def _triad(a, b, c, s):
+    for i in prange(a.shape[0]):
+        a[i] = b[i] + s * c[i]
+
+
+def memory_bandwidth(threads, mbytes=256, repeats=5) -> float:
+    """Streaming bandwidth [GB/s]: a = b + s c over float64 arrays of ``mbytes`` each (3 streams)."""
+    import numba
+
+    n = mbytes * (1 << 20) // 8
+    a, b, c = np.zeros(n), np.ones(n), np.ones(n)
+    previous = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        _triad(a, b, c, 0.5)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            _triad(a, b, c, 0.5)
+            times.append(time.perf_counter() - t)
+    finally:
+        numba.set_num_threads(previous)
+    return 3 * a.nbytes / min(times) / 1e9
 
 
 # the kernels' flags (fastmath as in the message update; no zero-divisor check), so the loop vectorises as theirs

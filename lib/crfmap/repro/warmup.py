@@ -37,8 +37,7 @@ KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf
                   "crf/inference/_plain_kernels.py")
 LIBRARY = Path(__file__).resolve().parents[1]
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
-NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/common.py",
-                 "bench/machine.py",
+NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py", "raycast.py", "bench/machine.py",
                  "assess/scansplit.py", "assess/block_bootstrap.py",
                  "experiments/background.py")
 

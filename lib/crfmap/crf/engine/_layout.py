@@ -22,8 +22,12 @@ def unary_odds(p, link, floor):
 
     ``link`` = (l00, l01, l10, l11); as :func:`crfmap.crf.model.potentials.link_unary`.
     """
-    occ = link[0] * p + link[1] * (1.0 - p)
-    emp = link[2] * p + link[3] * (1.0 - p)
+    return _odds(link[0] * p + link[1] * (1.0 - p), link[2] * p + link[3] * (1.0 - p), floor)
+
+
+@njit(inline="always", cache=True, error_model="numpy")
+def _odds(occ, emp, floor):
+    """:func:`unary_odds` from the two link sums, occupied and empty."""
     hi = (1.0 - floor) / floor  # the odds of P = 1 - floor (a loop invariant)
     r = occ / emp if emp > 0 else (hi if occ > 0 else 1.0)  # one division: P = occ / (occ + emp) as odds
     return min(max(r, 1.0 / hi), hi)
@@ -181,7 +185,7 @@ def _start_row(prob, y, link, floor, co, lo, hi, fu, fr, fa, fb, s, r0, r1, un):
             occ = link[0] * p + link[1] * (1.0 - p)
             emp = link[2] * p + link[3] * (1.0 - p)
             certain += np.int64(((emp == 0.0) & (occ > 0.0)) | ((occ == 0.0) & (emp > 0.0)))
-            fu[x] = unary_odds(p, link, floor)
+            fu[x] = _odds(occ, emp, floor)
     else:
         for x in range(w):
             fu[x] = unary_odds(prob[y, x], link, floor)
