@@ -52,7 +52,8 @@ def _converge(ax, records, top):
     for r in pick(records, "converge-start"):
         if r["seconds_to_converge"] is not None:
             ax.plot([r["size"] ** 2], [r["seconds_to_converge"]], "k*" if r["start"] == "uniform" else "r*",
-                    markersize=10, label=f"{r['start']} start, {r['iterations']} it., {r['threads']} threads")
+                    markersize=10, label=f"thesis's table (information): {r['start']} start, {r['iterations']} it., "
+                    f"{r['threads']} threads")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("cells")
