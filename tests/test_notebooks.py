@@ -39,7 +39,9 @@ def test_the_cell_length_check_counts_every_line(tmp_path):
 @pytest.mark.slow  # 15 s to minutes each; `make test` runs them in parallel (pytest -n)
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_executes(notebook, tmp_path, monkeypatch):
-    import papermill as pm
+    from crfmap.repro.run import import_papermill
+
+    pm = import_papermill()
 
     missing = [f for f in data_needed(notebook) if not paths.have_data(f)]
     if missing:

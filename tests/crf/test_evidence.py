@@ -112,3 +112,19 @@ def test_no_iteration_sends_nothing_but_certain_beliefs_are_exact(kernel):
     np.testing.assert_allclose(r.beliefs.probability, grid, atol=1e-12)
     assert r.beliefs.probability[0, 0] == 1.0 and r.beliefs.probability[0, 2] == 0.0
     np.testing.assert_array_equal(r.messages, 0.5)
+
+
+def test_certainty_spreads_past_the_propagation_stack_s_first_size():
+    # the stack starts at 1024 cells: 1400 certain senders, each the only one next to its two uncertain
+    # neighbours (only senders spread), so a sender lost while the stack grows leaves a neighbour uncertain
+    tables = directional_tables(np.array([[1.0, 0.0], [0.0, 1.0]]), "receiver")
+    link = [[1.0, 0.0], [0.0, 1.0]]
+    row = np.full((1, 3 * 1400), 0.5)
+    row[0, ::3] = np.resize([0.0, 1.0], 1400)
+    senders = row != 0.5
+    spread = certain_states(row, link, tables, senders)
+    values = np.resize([0, 1], 1400)
+    j = np.arange(row.shape[1])
+    nearest = np.where(j % 3 == 2, j // 3 + 1, j // 3)  # the sender beside each cell (west, or east of a 3k + 2)
+    expected = np.where(nearest < 1400, values[np.minimum(nearest, 1399)], UNCERTAIN)[None]  # the last has none
+    np.testing.assert_array_equal(spread, expected)

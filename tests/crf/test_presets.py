@@ -116,3 +116,36 @@ def test_bad_temperature_is_named(bad):
 
     with pytest.raises(InputError, match="temperature"):
         replace(get_preset("certainty"), temperature=bad)
+
+
+def _observation_reference(preset, x):
+    """The certainty-scaled observation written out with NumPy, element by element as the module docstring says."""
+    with np.errstate(invalid="ignore"):
+        a = np.abs(x) - 1
+        logit = np.where(x > 0, np.minimum(preset.occupied[0] + preset.occupied[1] * a, preset.limit),
+                         -np.minimum(preset.free[0] + preset.free[1] * a, preset.limit))
+    return 1.0 / (1.0 + np.exp(-np.where(x == 0, 0.0, logit)))
+
+
+def test_the_observation_kernel_is_numpy_s_formula_bit_for_bit():
+    preset = get_preset("certainty")
+    rng = np.random.default_rng(3)
+    hits, passes = rng.integers(0, 40, (130, 70)), rng.integers(0, 40, (130, 70))
+    np.testing.assert_array_equal(preset.observation(hits=hits, passes=passes),
+                                  _observation_reference(preset, hits.astype(float) - passes))
+    p = rng.uniform(0.0, 1.0, (130, 70))
+    p[::5], p[1, ::3], p[2, ::4] = 0.5, 0.0, 1.0  # unknown, trinary free and occupied
+    np.testing.assert_array_equal(preset.observation(probability=p),
+                                  _observation_reference(preset, evidence_from_probability(p)))
+    assert preset.observation(probability=p[0]).shape == (70,)  # any shape: a row, a scalar
+    assert float(preset.observation(hits=np.array(3), passes=np.array(1))) == float(_observation_reference(
+        preset, np.array(2.0)))
+
+
+def test_the_observation_keeps_nan_and_a_zero_slope_caps_infinite_evidence_at_its_first_hit():
+    from dataclasses import replace
+
+    preset = replace(get_preset("certainty"), occupied=(1.5, 0.0), free=(0.75, 0.0))
+    u = preset.observation(probability=np.array([[np.nan, 1.0, 0.0, 0.5]]))
+    assert np.isnan(u[0, 0])
+    np.testing.assert_allclose(u[0, 1:], [1 / (1 + np.exp(-1.5)), 1 / (1 + np.exp(0.75)), 0.5], rtol=1e-15)

@@ -241,13 +241,10 @@ GROUPS = {  # crfmap bench --only: row groups -> the tasks that make them
 }
 
 
-def _all_tasks(tasks, quick, sizes, converge_sizes):
+def _all_tasks(tasks, quick, sizes, converge_start_size):
     """``tasks`` with every optional group added (``--only`` asks for groups whatever the --no-* flags say)."""
-    from crfmap.bench import goals as G
-
     extra = [("memory", 1024 if quick else max(sizes)), ("online", None), ("node", None), ("external", None),
-             ("start", None), ("explorer", None), ("reproduce", None),
-             ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE),
+             ("start", None), ("explorer", None), ("reproduce", None), ("converge-start", converge_start_size),
              ("preset-converge", None)]
     return tasks + [t for t in extra if t[0] not in {k for k, _ in tasks}]
 
@@ -255,7 +252,7 @@ def _all_tasks(tasks, quick, sizes, converge_sizes):
 def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, online=True, memory=True,
         external=True, goals=True, work=None, cold=None, external_max_size=EXTERNAL_MAX_SIZE, explorer_changes=None,
         converge_runs=2, online_tol=None, bandwidth_mbytes=None, only=None, peers=True, node=True,
-        preset_maps=None):
+        preset_maps=None, converge_start_size=None):
     """Yield benchmark records (see the module docstring); ``quick`` is small and fast (tests, CI).
 
     The reproduction's lighter settings (notebook 09 says which it used): ``work`` cell updates
@@ -270,6 +267,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     ``node=False`` the ROS node's (``node-*``), which no table of notebook 09 shows.
     ``preset_maps``: the maps of the default preset's convergence rows (default: the Intel and ACES logs
     and a 4096² office; quick: a 256² office; see :data:`crfmap.bench.goals.PRESET_MAPS`).
+    ``converge_start_size``: the grid side of the thesis-table convergence rows (information; default 4096, quick 256).
     ``only``: run just these groups of rows (:data:`GROUPS`, e.g. ``("node",)``), else every one the flags allow.
     """
     from tqdm.auto import tqdm
@@ -291,9 +289,9 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         tasks.append(("external", None))
     from crfmap.bench import goals as G
 
+    converge_start_size = converge_start_size or (G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)
     if goals:
-        tasks += [("start", None), ("explorer", None), ("reproduce", None),
-                  ("converge-start", G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE),
+        tasks += [("start", None), ("explorer", None), ("reproduce", None), ("converge-start", converge_start_size),
                   ("preset-converge", None)]
     if only is not None:
         unknown = [g for g in only if g not in GROUPS]
@@ -301,7 +299,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             raise InputError("--only", f"unknown row group(s) {', '.join(unknown) or '(none given)'}; known: "
                              f"{', '.join(GROUPS)}")
         wanted = {kind for g in only for kind in GROUPS[g]}
-        tasks = [(kind, size) for kind, size in _all_tasks(tasks, quick, sizes, converge_sizes) if kind in wanted]
+        tasks = [(kind, size) for kind, size in _all_tasks(tasks, quick, sizes, converge_start_size) if kind in wanted]
     bar = tqdm(tasks, desc="bench", disable=not progress)
     bounds, ceilings = {}, {}  # threads -> float32 one-pass bound, division ceiling [Mcell/s] of this run
     for kind, size in bar:

@@ -26,6 +26,21 @@ from pathlib import Path
 THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+def import_papermill():
+    """papermill, imported without the IRI checker jsonschema would load with it.
+
+    nbformat imports jsonschema, whose format module eagerly imports ``rfc3987_syntax`` when it is
+    installed (jupyter-events pulls it in); that builds ~35 Lark parsers, about 2 s of every notebook
+    run's start (python-jsonschema/jsonschema#1428). No notebook schema uses the ``iri`` formats it
+    checks, so it is kept out of this process: jsonschema then leaves those two formats unchecked.
+    """
+    if "jsonschema" not in sys.modules:  # too late once jsonschema is in: leave that process as it is
+        sys.modules.setdefault("rfc3987_syntax", None)  # None: its import raises ImportError, which jsonschema skips
+    import papermill
+
+    return papermill
+
+
 def run_notebook(notebook, output_root, parameters=None, executed=None, log=None, timeout=3600,
                  threads=None) -> Path:
     """Execute ``notebook`` into ``output_root``; returns the executed notebook's path.
@@ -34,8 +49,7 @@ def run_notebook(notebook, output_root, parameters=None, executed=None, log=None
 
     Raises papermill's execution error (with ``ename``/``evalue``) when a cell fails.
     """
-    import papermill as pm
-
+    pm = import_papermill()
     notebook, output_root = Path(notebook).resolve(), Path(output_root).resolve()
     parameters = dict(parameters or {})
     log = Path(log or output_root / "out" / "logs" / notebook.name)

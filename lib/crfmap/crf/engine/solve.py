@@ -56,6 +56,12 @@ def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, mes
     """
     shape = prob.shape
     t = [time.perf_counter()]
+    if region is not None and messages is None and states is None:  # the presets' call: the lean bounded path
+        beliefs, packed, box = _bounded_uniform_block(prob, tables, link, floor, region, dtype)
+        if packed is None:
+            return EngineResult(beliefs, lambda: initial_messages(shape, dtype), [0.0][:max_iter], {}, None)
+        changes = packed.run(max_iter, tol, threads, block=block, freeze=freeze)
+        return EngineResult(*_bounded_uniform_result(beliefs, packed, box, dtype), changes, {}, None)
     if region is not None:
         msg, packed, corner = _bounded_block(prob, tables, link, floor, region, messages, dtype, states)
         changes = ([0.0] if max_iter > 0 else []) if packed is None else \
@@ -103,6 +109,44 @@ def _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fu
     return packed, states
 
 
+def _box(active, shape):
+    """(y0, y1, x0, x1) of the senders' bounding box plus a one-cell halo (their receivers), or None if none send."""
+    rows = np.flatnonzero(active.any(axis=1))
+    if not rows.size:
+        return None
+    cols = np.flatnonzero(active.any(axis=0))
+    return (max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, shape[0]),
+            max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, shape[1]))
+
+
+def _bounded_uniform_block(prob, tables, link, floor, active, dtype):
+    """Bounded LBP from uniform messages without hard evidence: (the beliefs outside the senders' box, the packed
+    box ready to iterate or None if no cell sends, the box (y0, y1, x0, x1)).
+
+    Only the box is packed, and filled with uniform messages: outside it every message stays uniform, so a
+    cell's belief there is its floored observation.
+    """
+    beliefs = np.clip(link_unary(prob, link), floor, 1.0 - floor)
+    box = _box(active, prob.shape)
+    if box is None:
+        return beliefs, None, None
+    y0, y1, x0, x1 = box
+    packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, floor)
+    packed.set_unary(prob, link, y0, x0)
+    packed.set_mask(active, y0, x0)
+    return beliefs, packed, box
+
+
+def _bounded_uniform_result(beliefs, packed, box, dtype):
+    """(beliefs, messages) of an iterated :func:`_bounded_uniform_block`: the box's beliefs from its packed planes;
+    the whole grid's messages unpacked when first read."""
+    y0, y1, x0, x1 = box
+    beliefs[y0:y1, x0:x1] = packed.beliefs()
+    packed.un = None  # the result keeps only the box's messages (and its mask: the slots they fill)
+    shape = beliefs.shape
+    return beliefs, lambda: packed.messages(initial_messages(shape, dtype), y0, x0)
+
+
 def _bounded_block(prob, tables, link, floor, active, messages, dtype, states):
     """(the whole grid's probability messages, the packed box around the senders or None if there are none,
     the box's lower-left cell (y0, x0))."""
@@ -111,12 +155,10 @@ def _bounded_block(prob, tables, link, floor, active, messages, dtype, states):
     if states is not None:
         clamp_messages(states, tables, msg, active)
         active = active & (states < 0)
-    rows = np.flatnonzero(active.any(axis=1))
-    if not rows.size:
+    box = _box(active, shape)
+    if box is None:
         return msg, None, (0, 0)
-    cols = np.flatnonzero(active.any(axis=0))
-    y0, y1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, shape[0])
-    x0, x1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, shape[1])
+    y0, y1, x0, x1 = box
     packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, floor)
     packed.set_unary(prob, link, y0, x0)
     packed.set_messages(msg, y0, x0)

@@ -72,6 +72,15 @@ def _count_certain_observations(prob, link, r0, r1):
 
 
 @njit(cache=True)
+def _doubled(stack, top):
+    """``stack`` copied into one twice its size (a loop: a slice assignment's shape check compiles for seconds)."""
+    grown = np.empty(2 * top, np.int64)
+    for k in range(top):
+        grown[k] = stack[k]
+    return grown
+
+
+@njit(cache=True)
 def _propagate(state, forced, senders, use_senders, steps):
     """Unit propagation of certainty through hidden tables with zeros (depth first, in place).
 
@@ -99,9 +108,7 @@ def _propagate(state, forced, senders, use_senders, steps):
                 state[y, x] = possible >> 1  # 1 (only occupied possible) or 0
         if state[y, x] >= 0:
             if top == stack.shape[0]:
-                grown = np.empty(2 * top, np.int64)
-                grown[:top] = stack
-                stack = grown
+                stack = _doubled(stack, top)
             stack[top] = i
             top += 1
     while top > 0:
@@ -127,9 +134,7 @@ def _propagate(state, forced, senders, use_senders, steps):
                 return ny * w + nx, i
             state[ny, nx] = f
             if top == stack.shape[0]:
-                grown = np.empty(2 * top, np.int64)
-                grown[:top] = stack
-                stack = grown
+                stack = _doubled(stack, top)
             stack[top] = ny * w + nx
             top += 1
     return -1, -1

@@ -47,10 +47,12 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.regions import near_known
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
+from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
@@ -117,6 +119,31 @@ def _check_temperature(temperature) -> float:
     return t
 
 
+@njit(cache=True, nogil=True)  # no fastmath: NumPy's operations, in its order
+def _certainty_rows(values, from_probability, o0, o1, f0, f1, limit, out, r0, r1):
+    """The certainty-scaled observation's P(occupied) of rows [r0, r1): ``values`` holds the signed evidence x, or
+    (``from_probability``) a grid's P, read back as x (:func:`evidence_from_probability`). NaN stays NaN."""
+    for y in range(r0, r1):
+        for i in range(values.shape[1]):
+            x = values[y, i]
+            if from_probability:
+                p = x
+                x = np.tan(np.pi * (p - 0.5))
+                if p >= 1.0:
+                    x = np.inf
+                elif p <= 0.0:
+                    x = -np.inf
+                elif p == 0.5:
+                    x = 0.0
+            if x > 0:
+                logit = min(o0 + o1 * (x - 1), limit) if o1 != 0 else min(o0, limit)  # o1 = 0: no inf * 0
+            elif x < 0:
+                logit = -(min(f0 + f1 * (-x - 1), limit) if f1 != 0 else min(f0, limit))
+            else:
+                logit = x * 0.0  # 0, or NaN for NaN
+            out[y, i] = 1.0 / (1.0 + np.exp(-logit))
+
+
 @dataclass(frozen=True)
 class Preset:
     """One named CRF configuration (see the module docstring)."""
@@ -149,16 +176,19 @@ class Preset:
             if h.shape != e.shape:
                 raise InputError("passes", f"shape {e.shape} does not match hits {h.shape}")
             x = h.astype(np.float64) - e
+            if not self.scaled:
+                return 0.5 + np.arctan(x) / math.pi
         else:
-            x = evidence_from_probability(probability)
-        if not self.scaled:
-            return 0.5 + np.arctan(x) / math.pi if hits is not None else np.asarray(probability, np.float64)
-        with np.errstate(invalid="ignore"):
-            a = np.abs(x) - 1
-            logit = np.where(x > 0, np.minimum(self.occupied[0] + self.occupied[1] * a, self.limit),
-                             -np.minimum(self.free[0] + self.free[1] * a, self.limit))
-        logit = np.where(x == 0, 0.0, logit)
-        return 1.0 / (1.0 + np.exp(-logit))
+            x = np.asarray(probability, np.float64)
+            if not self.scaled:
+                return x
+        # one pass over the cells (NumPy's nine temporaries took 12 ms on a 600k-cell map, as long as 10 LBP passes)
+        rows = np.ascontiguousarray(x).reshape(-1, x.shape[-1] if x.ndim else 1)
+        out = np.empty(rows.shape)
+        if rows.size:
+            over_rows(_certainty_rows, rows.shape[0], rows, hits is None, float(self.occupied[0]),
+                      float(self.occupied[1]), float(self.free[0]), float(self.free[1]), float(self.limit), out)
+        return out.reshape(x.shape)
 
     def region(self, observed) -> np.ndarray | None:
         """Cells LBP runs on: within ``margin`` cells of an observed cell (None: all)."""
