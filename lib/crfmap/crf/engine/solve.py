@@ -6,7 +6,10 @@ once, writes the observation odds and the messages after the first half-sweep (s
 of the message planes), and counts on the way the cells a caller's grid check and the hard
 evidence need (:func:`fused_start_applies`). Warm starts, hard evidence and regions take the
 general path: uniform planes, then the unary, messages, clamps or the region's box (bounded LBP
-packs only the bounding box of the region plus a one-cell halo, the receivers).
+packs only the bounding box of the region plus a one-cell halo, the receivers). A region from
+uniform messages without hard evidence (every preset's call) packs only that box too, but builds
+no whole-grid message array: its beliefs come from the packed planes (outside the box, the
+floored observation) and its messages are unpacked when first read.
 """
 from __future__ import annotations
 
