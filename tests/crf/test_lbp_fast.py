@@ -228,3 +228,29 @@ def test_timings_and_messages_unpacked_on_first_read():
     assert callable(fast.__dict__["_messages"])  # not unpacked yet
     np.testing.assert_allclose(fast.messages, plain.messages, atol=1e-12)
     assert fast.messages is fast.messages  # unpacked once
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_a_region_from_uniform_messages_matches_the_general_path(dtype):
+    # the lean bounded path (no warm start, no hard evidence) against the general one, which a warm start
+    # with uniform messages takes: the same messages bit for bit, the same beliefs to rounding, and outside
+    # the senders' box (plus its one-cell halo) the floored observation
+    from crfmap.crf.model.potentials import link_unary
+
+    p = RNG.uniform(0.05, 0.95, (60, 70))
+    region = np.zeros(p.shape, bool)
+    region[10:30, 15:40] = True
+    lean = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=40, tol=1e-9, dtype=dtype)
+    general = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=40, tol=1e-9, dtype=dtype,
+                    messages=np.full((4,) + p.shape, 0.5))
+    assert lean.iterations == general.iterations
+    np.testing.assert_array_equal(lean.messages, general.messages)
+    rounding = 1e-14 if dtype == np.float64 else 1e-6  # odds against probability formula of the same messages
+    np.testing.assert_allclose(lean.beliefs.probability, general.beliefs.probability, rtol=0, atol=rounding)
+    outside = np.ones(p.shape, bool)
+    outside[9:31, 14:41] = False
+    floored = np.clip(link_unary(p, LINK), MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)
+    np.testing.assert_array_equal(lean.beliefs.probability[outside], floored[outside])
+    again = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=40, tol=1e-6, dtype=dtype,
+                  messages=lean.messages)  # the lazily unpacked messages warm-start a settled run
+    assert again.converged and again.iterations == 1
