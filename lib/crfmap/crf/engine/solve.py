@@ -67,8 +67,8 @@ def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, mes
         return EngineResult(*_bounded_uniform_result(beliefs, packed, box, dtype), changes, {}, None)
     if region is not None:
         msg, packed, corner = _bounded_block(prob, tables, link, floor, region, messages, dtype, states)
-        changes = ([0.0] if max_iter > 0 else []) if packed is None else \
-            packed.run(max_iter, tol, threads, block=block, freeze=freeze)
+        changes = [0.0][:max_iter] if packed is None else packed.run(max_iter, tol, threads, block=block,
+                                                                      freeze=freeze)
         if packed is not None:
             packed.messages(msg, *corner)
         unary = np.clip(link_unary(prob, link), floor, 1.0 - floor)
@@ -112,32 +112,30 @@ def _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fu
     return packed, states
 
 
-def _box(active, shape):
-    """(y0, y1, x0, x1) of the senders' bounding box plus a one-cell halo (their receivers), or None if none send."""
+def _packed_box(prob, tables, link, floor, active, dtype):
+    """(the packed box of the senders plus a one-cell halo (their receivers), filled with uniform messages and
+    holding the box's observations and senders; the box (y0, y1, x0, x1)), or (None, None) if no cell sends."""
     rows = np.flatnonzero(active.any(axis=1))
     if not rows.size:
-        return None
+        return None, None
     cols = np.flatnonzero(active.any(axis=0))
-    return (max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, shape[0]),
-            max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, shape[1]))
+    y0, y1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, prob.shape[0])
+    x0, x1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, prob.shape[1])
+    packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, floor)
+    packed.set_unary(prob, link, y0, x0)
+    packed.set_mask(active, y0, x0)
+    return packed, (y0, y1, x0, x1)
 
 
 def _bounded_uniform_block(prob, tables, link, floor, active, dtype):
     """Bounded LBP from uniform messages without hard evidence: (the beliefs outside the senders' box, the packed
     box ready to iterate or None if no cell sends, the box (y0, y1, x0, x1)).
 
-    Only the box is packed, and filled with uniform messages: outside it every message stays uniform, so a
-    cell's belief there is its floored observation.
+    Only the box is packed (:func:`_packed_box`): outside it every message stays uniform, so a cell's belief
+    there is its floored observation.
     """
     beliefs = np.clip(link_unary(prob, link), floor, 1.0 - floor)
-    box = _box(active, prob.shape)
-    if box is None:
-        return beliefs, None, None
-    y0, y1, x0, x1 = box
-    packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, floor)
-    packed.set_unary(prob, link, y0, x0)
-    packed.set_mask(active, y0, x0)
-    return beliefs, packed, box
+    return (beliefs,) + _packed_box(prob, tables, link, floor, active, dtype)
 
 
 def _bounded_uniform_result(beliefs, packed, box, dtype):
@@ -158,12 +156,8 @@ def _bounded_block(prob, tables, link, floor, active, messages, dtype, states):
     if states is not None:
         clamp_messages(states, tables, msg, active)
         active = active & (states < 0)
-    box = _box(active, shape)
-    if box is None:
+    packed, box = _packed_box(prob, tables, link, floor, active, dtype)
+    if packed is None:
         return msg, None, (0, 0)
-    y0, y1, x0, x1 = box
-    packed = PackedBlock(y1 - y0, x1 - x0, dtype, tables, floor)
-    packed.set_unary(prob, link, y0, x0)
-    packed.set_messages(msg, y0, x0)
-    packed.set_mask(active, y0, x0)
-    return msg, packed, (y0, x0)
+    packed.set_messages(msg, box[0], box[2])
+    return msg, packed, (box[0], box[2])
