@@ -2,8 +2,8 @@
 
 A cell's four messages are computed in :func:`_four_unclamped` / :func:`_four`, a row of one colour
 sends in :func:`_send`, and a pass of several iterations (temporal blocking) is :func:`_pass`
-(:func:`_band_trapezoid` on every band of rows, then :func:`_gap_trapezoid` between bands), the
-only kernel Python calls to iterate. Same schedule and fixed
+(:func:`_trapezoid` on every band of rows, then the inverted ones between bands, a step of rows at a time in
+:func:`_phase_rows`), the only kernel Python calls to iterate. Same schedule and fixed
 point as :func:`crfmap.crf.inference._plain_kernels._send_rows`
 (cells with (x + y) even send, then the others), laid out for SIMD and for cache:
 
@@ -273,9 +273,7 @@ def _segment(msg, un, act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty):
         _send(msg, un, act, c, y, k0 + first, n, co, lo, hi, measure, w_n, w_s, cb, ty)
 
 
-# not inlined: both trapezoids call this one compiled row (a function call per row costs nothing next to
-# a row's cells, while inlining it twice doubled the kernels' compile time, the first call's wait)
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
 def _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo, hi, measure, cb):
     """Colour c of row y sends: the cells of the row's active segments (one row of a half-sweep)."""
     ty = y // tile_h
@@ -286,6 +284,25 @@ def _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo,
         _segment(msg, un, act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty)
 
 
+# not inlined: both trapezoids call this one compiled loop of rows (inlining the rows twice doubled the kernels'
+# compile time, the first call's wait), once per wavefront step or gap phase: one call per row cost ~7% at 512^2.
+# No branch on which trapezoid calls: LLVM would unswitch the loop on it, compiling the rows twice
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, measure_from, cb, count, j_from, dj,
+                y_from, dy, y0, y1, ylo, yhi):
+    """Phase j_from + t dj on row y_from + t dy for 0 <= t < count, rows kept in [y0, y1) shrunk by j at inner edges
+    (edges at ``ylo`` / ``yhi`` do not shrink): one wavefront step of a band or one phase of a gap."""
+    for t in range(count):
+        j = j_from + t * dj
+        y = y_from + t * dy
+        lo_row = y0 + j if y0 > ylo else ylo
+        hi_row = y1 - j if y1 < yhi else yhi
+        if y < lo_row or y >= hi_row:
+            continue
+        _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi, (j >> 1) >= measure_from,
+                   cb)
+
+
 # --- passes ----------------------------------------------------------------------------------
 # Rows are cut into tiles of tile_h rows; in each row tile, only the cells of the segments
 # segs[ty, :nseg[ty]] (column ranges [x0, x1)) send: the others are frozen. Changes are
@@ -294,34 +311,23 @@ def _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo,
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _band_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi,
-                    phases, measure_from, cb, first_phase):
-    """Stage 1 of a pass on rows [y0, y1): phase j covers rows shrunk by j at inner edges.
+def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi, phases, measure_from,
+               cb, first_phase, gap):
+    """The trapezoid of the band on rows [y0, y1) (``gap`` False), or the inverted one around the band edge y1.
 
-    Edges at ``ylo`` / ``yhi`` (the first / last row that has senders) do not shrink.
-    Wavefront order: at step s, phase j works on row s - j, so the rows a phase needs were
-    finished by phase j - 1 one step earlier and every live row stays in cache. Phases before
-    ``first_phase`` were done already (e.g. the first half-sweep, while packing).
+    Band: phase j covers the band's rows shrunk by j at inner edges (edges at ``ylo`` / ``yhi``, the
+    first / last row that has senders, do not shrink). Wavefront order: at step s, phase j works on
+    row s - j, so the rows a phase needs were finished by phase j - 1 one step earlier and every live
+    row stays in cache. Phases before ``first_phase`` were done already (e.g. the first half-sweep,
+    while packing). Gap: phase j on rows [y1 - j, y1 + j), for 1 <= j < phases.
     """
-    for s in range(y0 + first_phase, y1 + phases):
-        for j in range(first_phase, phases):
-            y = s - j
-            lo_row = y0 + j if y0 > ylo else ylo
-            hi_row = y1 - j if y1 < yhi else yhi
-            if y < lo_row or y >= hi_row:
-                continue
-            _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
-                       (j >> 1) >= measure_from, cb)
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
-def _gap_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edge, ylo, yhi,
-                   phases, measure_from, cb):
-    """Stage 2: the inverted trapezoid around the band edge ``edge``, rows [edge - j, edge + j)."""
-    for j in range(1, phases):
-        for y in range(max(edge - j, ylo), min(edge + j, yhi)):
-            _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
-                       (j >> 1) >= measure_from, cb)
+    # one call site of the rows: each would hold its own compiled copy of them
+    for u in range(1 if gap else y0 + first_phase, phases if gap else y1 + phases):
+        y_from = max(y1 - u, ylo) if gap else u - first_phase
+        count = min(y1 + u, yhi) - y_from if gap else phases - first_phase
+        _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, measure_from, cb, count,
+                    u if gap else first_phase, 0 if gap else 1, y_from, 1 if gap else -1,
+                    ylo if gap else y0, yhi if gap else y1, ylo, yhi)
 
 
 # a parfor even for one band on one thread: numba compiles the trapezoids' code inside its parallel
@@ -340,12 +346,8 @@ def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges,
     phases = 2 * iterations
     nb = edges.shape[0] - 1
     for b in prange(nb - stage):
-        if stage == 0:
-            _band_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b],
-                            edges[b + 1], edges[0], edges[nb], phases, measure_from, cb, first_phase)
-        else:
-            _gap_trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b + 1],
-                           edges[0], edges[nb], phases, measure_from, cb)
+        _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b], edges[b + 1], edges[0],
+                   edges[nb], phases, measure_from, cb, first_phase, stage == 1)
     return 0
 
 
