@@ -148,7 +148,7 @@ def test_a_settled_run_is_always_confirmed_by_a_whole_grid_iteration(small_tiles
     tol = 1e-6
     tables = directional_tables([[10.0, 1.0], [1.0, 10.0]])
     cut_in_a_frozen_phase = 0
-    for max_iter in range(40, 400, 3):
+    for max_iter in range(41, 400, 2):  # the settled frozen pass ends where the rate predicts: cut often
         block = F.PackedBlock(h, w, np.float64, tables, MESSAGE_FLOOR)
         block.set_unary(obs, np.eye(2))
         passes = []  # (whole grid?, the pass's measured change), one per pass block.run makes
@@ -184,8 +184,8 @@ def test_blocks_measure_their_last_iteration_and_grow_after_a_warm_start():
     obs = RNG.uniform(0.1, 0.9, (50, 60))
     r = infer(obs, max_iter=20, tol=0.0, schedule=Checkerboard(block=8))
     assert r.iterations == 20 and r.max_change.shape == (20,)
-    # from uniform messages: blocks of 8, 8 and the 4 left
-    assert np.flatnonzero(np.isfinite(r.max_change)).tolist() == [7, 15, 19]
+    # from uniform messages: two half blocks (their changes give the rate), blocks of 8 and the 4 left
+    assert np.flatnonzero(np.isfinite(r.max_change)).tolist() == [3, 7, 15, 19]
     # warm start: blocks of 1, 2, 4, 8 and the 5 left, measured at iterations 1, 3, 7, 15, 20
     w = infer(obs, max_iter=20, tol=0.0, schedule=Checkerboard(block=8), messages=r.messages)
     assert np.flatnonzero(np.isfinite(w.max_change)).tolist() == [0, 2, 6, 14, 19]
@@ -237,13 +237,13 @@ def test_a_region_from_uniform_messages_matches_the_general_path(dtype):
     # the senders' box (plus its one-cell halo) the floored observation
     from crfmap.crf.model.potentials import link_unary
 
-    p = RNG.uniform(0.05, 0.95, (60, 70))
+    p = np.random.default_rng(5).uniform(0.05, 0.95, (60, 70))  # its own draw: xdist orders the module's RNG calls
     region = np.zeros(p.shape, bool)
     region[10:30, 15:40] = True
-    lean = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=40, tol=1e-9, dtype=dtype)
-    general = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=40, tol=1e-9, dtype=dtype,
+    lean = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=400, tol=1e-6, dtype=dtype)
+    general = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=400, tol=1e-6, dtype=dtype,
                     messages=np.full((4,) + p.shape, 0.5))
-    assert lean.iterations == general.iterations
+    assert lean.converged and lean.iterations == general.iterations
     np.testing.assert_array_equal(lean.messages, general.messages)
     rounding = 1e-14 if dtype == np.float64 else 1e-6  # odds against probability formula of the same messages
     np.testing.assert_allclose(lean.beliefs.probability, general.beliefs.probability, rtol=0, atol=rounding)
@@ -251,6 +251,31 @@ def test_a_region_from_uniform_messages_matches_the_general_path(dtype):
     outside[9:31, 14:41] = False
     floored = np.clip(link_unary(p, LINK), MESSAGE_FLOOR, 1 - MESSAGE_FLOOR)
     np.testing.assert_array_equal(lean.beliefs.probability[outside], floored[outside])
-    again = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=40, tol=1e-6, dtype=dtype,
+    again = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=400, tol=1e-5, dtype=dtype,
                   messages=lean.messages)  # the lazily unpacked messages warm-start a settled run
     assert again.converged and again.iterations == 1
+
+
+def test_iterations_to_tol_follows_the_measured_rate():
+    # halving every iteration: from 1e-3 at iteration 10 to below 1e-5 takes 7 more (2^-7 < 1e-2 < 2^-6)
+    assert F._iterations_to_tol((9, 2e-3), (10, 1e-3), 1e-5) == 7
+    assert F._iterations_to_tol((0, 0.5), (10, 0.5 * 0.5 ** 10), 0.5 * 0.5 ** 10) == 1  # already below: one more
+    assert F._iterations_to_tol((0, 1e-3), (8, 2e-3), 1e-5) > 10 ** 6  # growing: no prediction
+    assert F._iterations_to_tol((0, 1e-3), (8, 1e-3), 1e-5) > 10 ** 6  # flat
+    assert F._iterations_to_tol((0, 1e-3), (8, 1e-4), 0.0) > 10 ** 6  # tol 0: run to max_iter
+
+
+@pytest.mark.parametrize("region", [False, True])
+def test_the_last_pass_stops_near_where_the_plain_kernel_first_meets_tol(region):
+    """Passes grow 1, 2, 4, ... up to block, but the one predicted to reach tol is cut to the measured rate:
+    the run stops a few iterations after the plain kernel's first iteration below tol, not up to block - 1."""
+    obs = np.clip(RNG.normal(0.5, 0.2, (96, 128)), 0.0, 1.0)
+    hidden, tol, block = [[2.0, 1.0], [1.0, 2.0]], 1e-7, 32
+    yy, xx = np.mgrid[0:96, 0:128]
+    mask = (yy - 48) ** 2 + (xx - 64) ** 2 < 40 ** 2 if region else None
+    plain = infer(obs, hidden, max_iter=500, tol=0.0, schedule=PLAIN, region=mask)
+    first_below = int(np.argmax(plain.max_change < tol)) + 1  # iterations the plain kernel needs
+    fast = infer(obs, hidden, max_iter=500, tol=tol, schedule=Checkerboard(block=block), region=mask)
+    assert fast.converged and fast.max_change[-1] < tol
+    assert first_below <= fast.iterations <= first_below + 3, (first_below, fast.iterations)
+    assert np.abs(fast.beliefs.probability - plain.beliefs.probability).max() < 1e-6

@@ -8,6 +8,8 @@ grids -- only over the tiles whose messages still move (:meth:`PackedBlock.run`)
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from crfmap.crf.engine._layout import (
@@ -305,7 +307,10 @@ class PackedBlock:
 
         Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
         its last (start at 1 after a warm start, which may stop at once; at ``block`` from
-        uniform messages, which never do). With ``freeze`` (a change smaller than ``tol``;
+        uniform messages, which never do: then two passes of ``block / 2`` first). Once two passes
+        measured, a pass is cut to the iterations the last two changes' rate predicts to reach
+        ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up to ``block - 1``
+        iterations past it. With ``freeze`` (a change smaller than ``tol``;
         None: ``FREEZE * tol``): once fewer than SPARSE_FRACTION of the tiles moved by
         more than ``freeze`` in a measured iteration, only those tiles and their four
         neighbours iterate in the next pass; the others ("frozen") keep their messages, which
@@ -320,18 +325,27 @@ class PackedBlock:
             freeze = FREEZE * tol
         changes = []
         size = max(1, int(first))
+        # from uniform messages (first = block) two half passes come first: their changes give the rate of
+        # convergence before a whole pass could run past tol
+        halves = 2 if size >= block >= 4 else 0
+        size = block // 2 if halves else size
         # freezing tiles pays only on grids of many tiles
         sparse = freeze is not None and (freeze < tol or freeze == 0) and self.active_cells >= SPARSE_CELLS
         active = None
+        measured = []  # (iterations done, change) after each pass: the rate of convergence
         while len(changes) < max_iter:
             n = min(size, block, max_iter - len(changes))
+            if len(measured) >= 2:  # the last pass stops near tol, not up to block - 1 iterations beyond it
+                n = min(n, _iterations_to_tol(*measured[-2:], tol))
             args, stages, cb = self._pass_arguments(n, threads, True, active)
             for stage in range(stages):  # the bands, then the gaps between them
                 _pass(*args, stage)  # the numba pass: every message update happens in there
             change, per_tile = self._pass_change(cb, True, sparse)
             changes.extend([float("nan")] * (n - 1) + [change])
             whole_grid = active is None
-            size *= 2
+            measured.append((len(changes), change))
+            halves -= 1
+            size = size if halves > 0 else 2 * size
             if change < tol:
                 if active is None:
                     break  # an iteration of every cell moved no message by tol
@@ -344,6 +358,16 @@ class PackedBlock:
             # max_iter ran out before an iteration of every cell confirmed the settled tiles
             changes[-1] = float("nan")
         return changes
+
+
+def _iterations_to_tol(earlier, later, tol):
+    """Iterations after ``later`` until the largest change falls below ``tol`` if it keeps shrinking at the rate
+    it did from ``earlier`` (each an (iterations done, change) pair); a large number where it did not shrink."""
+    (i0, c0), (i1, c1) = earlier, later
+    if not (0.0 < c1 < c0 and i1 > i0 and tol > 0.0):
+        return 1 << 30
+    rate = math.log(c1 / c0) / (i1 - i0)  # log of the factor per iteration, < 0
+    return max(1, math.ceil(math.log(tol / c1) / rate)) if c1 >= tol else 1
 
 
 def _dilate(mask):
