@@ -184,8 +184,11 @@ def test_blocks_measure_their_last_iteration_and_grow_after_a_warm_start():
     obs = RNG.uniform(0.1, 0.9, (50, 60))
     r = infer(obs, max_iter=20, tol=0.0, schedule=Checkerboard(block=8))
     assert r.iterations == 20 and r.max_change.shape == (20,)
-    # from uniform messages: two half blocks (their changes give the rate), blocks of 8 and the 4 left
-    assert np.flatnonzero(np.isfinite(r.max_change)).tolist() == [3, 7, 15, 19]
+    # from uniform messages, tol 0 (no stop to predict): blocks of 8, 8 and the 4 left
+    assert np.flatnonzero(np.isfinite(r.max_change)).tolist() == [7, 15, 19]
+    # with a tol: two half blocks first (their changes give the rate), then blocks of 8 and the 4 left
+    t = infer(obs, max_iter=20, tol=1e-300, schedule=Checkerboard(block=8))
+    assert np.flatnonzero(np.isfinite(t.max_change)).tolist() == [3, 7, 15, 19]
     # warm start: blocks of 1, 2, 4, 8 and the 5 left, measured at iterations 1, 3, 7, 15, 20
     w = infer(obs, max_iter=20, tol=0.0, schedule=Checkerboard(block=8), messages=r.messages)
     assert np.flatnonzero(np.isfinite(w.max_change)).tolist() == [0, 2, 6, 14, 19]

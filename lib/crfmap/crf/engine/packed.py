@@ -326,8 +326,9 @@ class PackedBlock:
         changes = []
         size = max(1, int(first))
         # from uniform messages (first = block) two half passes come first: their changes give the rate of
-        # convergence before a whole pass could run past tol
-        halves = 2 if size >= block >= 4 else 0
+        # convergence before a whole pass could run past tol (not for tol 0, which runs to max_iter: on a grid
+        # beyond the cache each pass is one more trip through memory)
+        halves = 2 if size >= block >= 4 and tol > 0 else 0
         size = block // 2 if halves else size
         # freezing tiles pays only on grids of many tiles
         sparse = freeze is not None and (freeze < tol or freeze == 0) and self.active_cells >= SPARSE_CELLS
