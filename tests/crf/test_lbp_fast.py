@@ -236,17 +236,18 @@ def test_timings_and_messages_unpacked_on_first_read():
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 def test_a_region_from_uniform_messages_matches_the_general_path(dtype):
     # the lean bounded path (no warm start, no hard evidence) against the general one, which a warm start
-    # with uniform messages takes: the same messages bit for bit, the same beliefs to rounding, and outside
-    # the senders' box (plus its one-cell halo) the floored observation
+    # with uniform messages takes: the same messages bit for bit over the same iterations (tol 0: both run
+    # max_iter, in passes cut differently), the same beliefs to rounding, and outside the senders' box (plus its
+    # one-cell halo) the floored observation
     from crfmap.crf.model.potentials import link_unary
 
     p = np.random.default_rng(5).uniform(0.05, 0.95, (60, 70))  # its own draw: xdist orders the module's RNG calls
     region = np.zeros(p.shape, bool)
     region[10:30, 15:40] = True
-    lean = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=400, tol=1e-6, dtype=dtype)
-    general = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=400, tol=1e-6, dtype=dtype,
+    lean = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=150, tol=0.0, dtype=dtype)
+    general = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=150, tol=0.0, dtype=dtype,
                     messages=np.full((4,) + p.shape, 0.5))
-    assert lean.converged and lean.iterations == general.iterations
+    assert lean.iterations == general.iterations == 150
     np.testing.assert_array_equal(lean.messages, general.messages)
     rounding = 1e-14 if dtype == np.float64 else 1e-6  # odds against probability formula of the same messages
     np.testing.assert_allclose(lean.beliefs.probability, general.beliefs.probability, rtol=0, atol=rounding)
@@ -257,6 +258,61 @@ def test_a_region_from_uniform_messages_matches_the_general_path(dtype):
     again = infer(p, [[3.0, 1.0], [1.0, 3.0]], LINK, region=region, max_iter=400, tol=1e-5, dtype=dtype,
                   messages=lean.messages)  # the lazily unpacked messages warm-start a settled run
     assert again.converged and again.iterations == 1
+
+
+def test_a_float64_region_iterates_in_float32_first_then_confirms_in_float64():
+    """The lean bounded path in float64 with tol >= MIXED_MIN_TOL: float32 passes, then float64 iterations from
+    their messages until one moves no message by tol. Converged by the same rule, within about tol of the
+    float64-only run, and its messages a float64 fixed point to tol (a warm start settles at once)."""
+    from crfmap.crf.engine.solve import MIXED_MIN_TOL
+
+    p = np.random.default_rng(6).uniform(0.05, 0.95, (80, 90))
+    region = np.zeros(p.shape, bool)
+    region[5:70, 10:80] = True
+    hidden, tol = [[3.0, 1.0], [1.0, 3.0]], 1e-5
+    assert tol >= MIXED_MIN_TOL
+    mixed = infer(p, hidden, LINK, region=region, max_iter=400, tol=tol)
+    narrow = infer(p, hidden, LINK, region=region, max_iter=400, tol=tol, dtype=np.float32)
+    tight = infer(p, hidden, LINK, region=region, max_iter=2000, tol=MIXED_MIN_TOL / 100)  # float64 only
+    assert mixed.converged and mixed.max_change[-1] < tol and mixed.messages.dtype == np.float64
+    assert mixed.iterations > narrow.iterations  # the float32 run, then at least one float64 iteration
+    assert np.abs(mixed.beliefs.probability - tight.beliefs.probability).max() < 20 * tol
+    assert np.abs(mixed.beliefs.probability - narrow.beliefs.probability).max() > 0  # not the float32 beliefs
+    again = infer(p, hidden, LINK, region=region, max_iter=400, tol=tol, messages=mixed.messages)
+    assert again.converged and again.iterations == 1
+    # below MIXED_MIN_TOL, float64 only: the tight run is the general path's, iteration for iteration
+    general = infer(p, hidden, LINK, region=region, max_iter=2000, tol=MIXED_MIN_TOL / 100,
+                    messages=np.full((4,) + p.shape, 0.5))
+    np.testing.assert_allclose(tight.beliefs.probability, general.beliefs.probability, rtol=0, atol=1e-7)
+
+
+def test_segments_of_active_tiles_match_a_loop_over_their_runs():
+    def by_loop(block, active):  # the obvious reference: one run of active tiles at a time
+        n_ty, n_tx = block.tile_shape()
+        segs, nseg, cells = np.zeros((n_ty, (n_tx + 1) // 2, 2), np.int64), np.zeros(n_ty, np.int64), 0
+        for ty in range(n_ty):
+            tx = 0
+            while tx < n_tx:
+                if not active[ty, tx]:
+                    tx += 1
+                    continue
+                t1 = tx
+                while t1 + 1 < n_tx and active[ty, t1 + 1]:
+                    t1 += 1
+                x0, x1 = tx * F.TILE_COLS, min((t1 + 1) * F.TILE_COLS, block.w)
+                segs[ty, nseg[ty]] = (x0, x1)
+                nseg[ty] += 1
+                cells += (min((ty + 1) * F.TILE_ROWS, block.h) - ty * F.TILE_ROWS) * (x1 - x0)
+                tx = t1 + 1
+        return segs, nseg, cells
+
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        h, w = rng.integers(1, 200, 2)
+        block = F.PackedBlock(h, w, np.float32, np.ones((4, 2, 2)), MESSAGE_FLOOR)
+        active = rng.random(block.tile_shape()) < rng.random()
+        want, got = by_loop(block, active), block._segments(active)
+        assert np.array_equal(want[0], got[0]) and np.array_equal(want[1], got[1]) and want[2] == got[2]
 
 
 def test_iterations_to_tol_follows_the_measured_rate():

@@ -206,6 +206,18 @@ class PackedBlock:
         self.row_range = (int(rows[0]), int(rows[-1]) + 1) if rows.size else (0, 0)
         self.active_cells = int(counts.sum())
 
+    def widened(self, tables, probability, link, y0=0, x0=0):
+        """This block in float64: its messages (copied, ghosts included), its senders (shared), and ``tables`` and the
+        observation odds of ``probability`` (as :meth:`set_unary`) in float64, not widened from float32."""
+        wide = PackedBlock(self.h, self.w, np.float64, tables, self.floor,
+                           (self.msg.astype(np.float64), np.empty(self.un.shape, np.float64)), fill=False)
+        rows = wide.un.reshape(-1, wide.un.shape[-1])
+        over_rows(_fill_ones, rows.shape[0], rows)  # the ghosts' observations
+        wide.set_unary(probability, link, y0, x0)
+        wide.act, wide.use_act, wide.lo_k, wide.hi_k = self.act, self.use_act, self.lo_k, self.hi_k
+        wide._extents_changed()
+        return wide
+
     # --- reading it ---------------------------------------------------------------------------
     def messages(self, out, y0=0, x0=0):
         """Write the probability messages into ``out[4, y0:y0+h, x0:x0+w]``."""
@@ -254,14 +266,13 @@ class PackedBlock:
         nseg = np.zeros(n_ty, np.int64)
         padded = np.zeros((n_ty, n_tx + 2), bool)
         padded[:, 1:-1] = active
-        starts = np.argwhere(padded[:, 1:-1] & ~padded[:, :-2])
-        ends = np.argwhere(padded[:, 1:-1] & ~padded[:, 2:])
-        cells = 0
-        for (ty, t0), (_, t1) in zip(starts, ends):  # argwhere is row-major: runs pair up
-            x0, x1 = t0 * TILE_COLS, min((t1 + 1) * TILE_COLS, self.w)
-            segs[ty, nseg[ty]] = (x0, x1)
-            nseg[ty] += 1
-            cells += (min((ty + 1) * TILE_ROWS, self.h) - ty * TILE_ROWS) * (x1 - x0)
+        ty, t0 = np.nonzero(padded[:, 1:-1] & ~padded[:, :-2])  # row-major: the runs' starts and ends pair up
+        t1 = np.nonzero(padded[:, 1:-1] & ~padded[:, 2:])[1]
+        x0, x1 = t0 * TILE_COLS, np.minimum((t1 + 1) * TILE_COLS, self.w)
+        rank = np.arange(ty.size) - np.searchsorted(ty, ty)  # each run's place in its row tile
+        segs[ty, rank, 0], segs[ty, rank, 1] = x0, x1
+        nseg += np.bincount(ty, minlength=n_ty)
+        cells = int(((np.minimum((ty + 1) * TILE_ROWS, self.h) - ty * TILE_ROWS) * (x1 - x0)).sum())
         return segs, nseg, cells
 
     def run_pass(self, iterations, threads, measure=True, active=None, per_tile=True):
