@@ -338,3 +338,48 @@ def test_the_last_pass_stops_near_where_the_plain_kernel_first_meets_tol(region)
     assert fast.converged and fast.max_change[-1] < tol
     assert first_below <= fast.iterations <= first_below + 3, (first_below, fast.iterations)
     assert np.abs(fast.beliefs.probability - plain.beliefs.probability).max() < 1e-6
+
+
+@pytest.mark.parametrize("shape, threads", [((1, 7), 1), ((6, 5), 1), ((97, 61), 1), ((450, 131), 2), ((900, 40), 2)])
+@pytest.mark.parametrize("max_iter, block", [(1, 16), (2, 16), (5, 16), (16, 16), (40, 16), (23, 4)])
+def test_the_last_pass_writes_the_beliefs_of_every_row_bit_for_bit(shape, threads, max_iter, block):
+    """Fused into the last pass (row by row, bands and the gaps between them), the beliefs are the beliefs pass's
+    after it: every cell written (NaN before), bit for bit; also after the fused first half-sweep."""
+    rng = np.random.default_rng(max_iter * 1000 + shape[0])
+    obs = rng.uniform(0.02, 0.98, shape)
+    tables = directional_tables([[3.0, 1.0], [1.0, 3.0]])
+    for start_uniform in (False, True):
+        if start_uniform and max_iter < 2:
+            continue  # the pass after start_uniform runs at least two iterations
+        block_ = F.PackedBlock(*shape, np.float64, tables, MESSAGE_FLOOR)
+        if start_uniform:
+            block_.start_uniform(obs, np.eye(2).ravel(), threads)
+        else:
+            block_.set_unary(obs, np.eye(2))
+        out = np.full(shape, np.nan)
+        changes = block_.run(max_iter, 0.0, threads, block=block, first=block if start_uniform else 1, beliefs=out)
+        assert len(changes) == max_iter and block_.beliefs_written
+        np.testing.assert_array_equal(out, block_.beliefs())
+    if shape[0] >= 450:  # several bands on two threads, so the gaps wrote rows too
+        assert len(block_.band_edges(block, threads)) > 2
+
+
+def test_beliefs_are_fused_only_into_a_whole_grid_pass_that_ends_the_run():
+    obs = np.random.default_rng(8).uniform(0.02, 0.98, (700, 700))  # big enough to freeze tiles
+    tables = directional_tables([[3.0, 1.0], [1.0, 3.0]])
+    block_ = F.PackedBlock(700, 700, np.float64, tables, MESSAGE_FLOOR)
+    block_.set_unary(obs, np.eye(2))
+    out = np.full(obs.shape, np.nan)
+    changes = block_.run(1000, 1e-6, 2, beliefs=out)
+    assert changes[-1] < 1e-6  # converged: its last pass (whole grid) wrote them
+    assert block_.beliefs_written
+    np.testing.assert_array_equal(out, block_.beliefs())
+    masked = F.PackedBlock(700, 700, np.float64, tables, MESSAGE_FLOOR)
+    masked.set_unary(obs, np.eye(2))
+    masked.set_mask(obs > 0.3)
+    untouched = np.full(obs.shape, np.nan)
+    masked.run(20, 0.0, 2, beliefs=untouched)
+    assert not masked.beliefs_written and np.isnan(untouched).all()  # a mask: the beliefs pass does it
+    r = infer(obs, [[3.0, 1.0], [1.0, 3.0]], np.eye(2), max_iter=30, tol=0.0)  # infer's whole grid: fused
+    np.testing.assert_allclose(r.beliefs.probability, infer(obs, [[3.0, 1.0], [1.0, 3.0]], np.eye(2), max_iter=30,
+                                                            tol=0.0, schedule=PLAIN).beliefs.probability, atol=1e-12)

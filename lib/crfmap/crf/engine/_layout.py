@@ -87,21 +87,29 @@ def _unpack_messages(packed, y0, x0, h, w, act, use_act, out, r0, r1):
 def _beliefs_packed(un, packed, h, w, out, r0, r1):
     """P(occupied) of every cell of the block: observation odds times its four message odds."""
     for y in range(r0, r1):
-        ce = y & 1  # colour of the even columns; cells 2m and 2m + 1 both sit at plane index m + 1
-        co = 1 - ce
-        for m in range(w >> 1):  # unit-stride reads of both planes, pairs of adjacent writes
-            k = m + 1
-            b = float(un[ce, y + 1, k]) * float(packed[ce, 0, y + 1, k]) * float(packed[ce, 1, y + 1, k])
-            b = b * float(packed[ce, 2, y + 1, k]) * float(packed[ce, 3, y + 1, k])
-            out[y, 2 * m] = b / (1.0 + b)
-            b = float(un[co, y + 1, k]) * float(packed[co, 0, y + 1, k]) * float(packed[co, 1, y + 1, k])
-            b = b * float(packed[co, 2, y + 1, k]) * float(packed[co, 3, y + 1, k])
-            out[y, 2 * m + 1] = b / (1.0 + b)
-        if w & 1:
-            k = (w >> 1) + 1
-            b = float(un[ce, y + 1, k]) * float(packed[ce, 0, y + 1, k]) * float(packed[ce, 1, y + 1, k])
-            b = b * float(packed[ce, 2, y + 1, k]) * float(packed[ce, 3, y + 1, k])
-            out[y, w - 1] = b / (1.0 + b)
+        _beliefs_row(un, packed, y, w, out)
+
+
+# not inlined, and no fastmath: the fused beliefs of the last pass (crf.engine._message_update) call this same
+# compiled row, so they are bit for bit these (inlined, the caller's contract flag could fuse 1 + b into an FMA)
+@njit(nogil=True, cache=True, error_model="numpy")
+def _beliefs_row(un, packed, y, w, out):
+    """P(occupied) of the cells of row y: observation odds times its four message odds."""
+    ce = y & 1  # colour of the even columns; cells 2m and 2m + 1 both sit at plane index m + 1
+    co = 1 - ce
+    for m in range(w >> 1):  # unit-stride reads of both planes, pairs of adjacent writes
+        k = m + 1
+        b = float(un[ce, y + 1, k]) * float(packed[ce, 0, y + 1, k]) * float(packed[ce, 1, y + 1, k])
+        b = b * float(packed[ce, 2, y + 1, k]) * float(packed[ce, 3, y + 1, k])
+        out[y, 2 * m] = b / (1.0 + b)
+        b = float(un[co, y + 1, k]) * float(packed[co, 0, y + 1, k]) * float(packed[co, 1, y + 1, k])
+        b = b * float(packed[co, 2, y + 1, k]) * float(packed[co, 3, y + 1, k])
+        out[y, 2 * m + 1] = b / (1.0 + b)
+    if w & 1:
+        k = (w >> 1) + 1
+        b = float(un[ce, y + 1, k]) * float(packed[ce, 0, y + 1, k]) * float(packed[ce, 1, y + 1, k])
+        b = b * float(packed[ce, 2, y + 1, k]) * float(packed[ce, 3, y + 1, k])
+        out[y, w - 1] = b / (1.0 + b)
 
 
 @njit(cache=True, error_model="numpy")

@@ -35,6 +35,8 @@ import numpy as np
 from numba import njit, prange, types
 from numba.extending import overload
 
+from crfmap.crf.engine._layout import _beliefs_row
+
 FASTMATH = {"nnan", "ninf", "nsz", "contract"}  # no NaN/inf ever occur (floors); lets min/max vectorise
 # ``act`` of a pass in which every cell may send: its dtype (bool, where a mask is uint8) tells the kernels at
 # compile time, so a first call compiles the row loops of its case only (whole grid or bounded), not all five
@@ -312,7 +314,7 @@ def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi, phases, measure_from,
-               cb, first_phase, gap):
+               cb, first_phase, gap, bel, with_beliefs):
     """The trapezoid of the band on rows [y0, y1) (``gap`` False), or the inverted one around the band edge y1.
 
     Band: phase j covers the band's rows shrunk by j at inner edges (edges at ``ylo`` / ``yhi``, the
@@ -320,7 +322,14 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
     row s - j, so the rows a phase needs were finished by phase j - 1 one step earlier and every live
     row stays in cache. Phases before ``first_phase`` were done already (e.g. the first half-sweep,
     while packing). Gap: phase j on rows [y1 - j, y1 + j), for 1 <= j < phases.
+
+    ``with_beliefs`` (the whole grid sends: ylo = 0, yhi = h): each row's beliefs go into ``bel`` as soon as it
+    and its two neighbours finished the last phase, while they are in cache. A band does rows [y0 + phases,
+    y1 - phases) (from ylo / to yhi at the grid's edges): at step s the last phase finished row s - phases + 1.
+    The gap does the rows between, [y1 - phases, y1 + phases), after its last phase.
     """
+    blo = y0 + phases if y0 > ylo else ylo
+    bhi = y1 - phases if y1 < yhi else yhi
     # one call site of the rows: each would hold its own compiled copy of them
     for u in range(1 if gap else y0 + first_phase, phases if gap else y1 + phases):
         y_from = max(y1 - u, ylo) if gap else u - first_phase
@@ -328,6 +337,11 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
         _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, measure_from, cb, count,
                     u if gap else first_phase, 0 if gap else 1, y_from, 1 if gap else -1,
                     ylo if gap else y0, yhi if gap else y1, ylo, yhi)
+        if with_beliefs and not gap and blo <= u - phases < bhi:
+            _beliefs_row(un, msg, u - phases, w, bel)
+    if with_beliefs and gap:
+        for y in range(max(y1 - phases, ylo), min(y1 + phases, yhi)):
+            _beliefs_row(un, msg, y, w, bel)
 
 
 # a parfor even for one band on one thread: numba compiles the trapezoids' code inside its parallel
@@ -335,19 +349,21 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
 # one parallel loop for both stages (not one each): its compile, the first call's wait, is a third shorter
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations, measure_from, cb,
-          first_phase, stage):
+          first_phase, stage, bel, with_beliefs):
     """Stage ``stage`` of ``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
     A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the
     inverted trapezoids between bands; nothing to do with one band). Rows outside [edges[0],
     edges[-1]) must hold no sender. Iterations from ``measure_from`` on are measured
     (max-accumulated together into ``cb``); half-sweeps before ``first_phase`` (0 or 1) were done already.
+    ``with_beliefs`` (every cell sends, edges from 0 to h): the beliefs after the pass into ``bel`` [h, w], row by
+    row while the pass has it in cache (one trip through memory fewer than a beliefs pass after it).
     """
     phases = 2 * iterations
     nb = edges.shape[0] - 1
     for b in prange(nb - stage):
         _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b], edges[b + 1], edges[0],
-                   edges[nb], phases, measure_from, cb, first_phase, stage == 1)
+                   edges[nb], phases, measure_from, cb, first_phase, stage == 1, bel, with_beliefs)
     return 0
 
 

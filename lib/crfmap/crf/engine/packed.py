@@ -34,6 +34,7 @@ TILE_COLS = 32  # [cells] narrow tiles freeze settled parts sooner (fewer cell u
 FREEZE = 0.01  # default freeze threshold, times tol: tiles that moved by less pause until a neighbour moves
 SPARSE_FRACTION = 0.5  # iterate tile by tile once fewer tiles than this still move
 SPARSE_CELLS = 1 << 18  # grids with fewer senders never freeze tiles (few tiles: freezing costs more than it saves)
+NO_BELIEFS = np.zeros((1, 1))  # the beliefs argument of a pass that writes none
 
 
 def odds_coefficients(tables, dtype, floor) -> np.ndarray:
@@ -113,6 +114,7 @@ class PackedBlock:
         self.lo_k, self.hi_k = full_extents(self.h, self.w)
         self._extents_changed()
         self.cell_updates = 0  # cells that sent, summed over iterations (work done)
+        self.beliefs_written = False  # whether the last pass of run() wrote the beliefs
         self.first_phase = 0  # 1: the next pass's first half-sweep was done while packing (start_uniform)
 
     # --- filling it ---------------------------------------------------------------------------
@@ -283,7 +285,7 @@ class PackedBlock:
         """
         args, stages, cb = self._pass_arguments(iterations, threads, measure, active)
         for stage in range(stages):
-            _pass(*args, stage)
+            _pass(*args, stage, NO_BELIEFS, False)
         return self._pass_change(cb, measure, per_tile)
 
     def _pass_arguments(self, iterations, threads, measure, active):
@@ -313,7 +315,7 @@ class PackedBlock:
         _tile_max(cb, TILE_COLS, self.w, tiles)
         return float(tiles.max()) if tiles.size else 0.0, tiles
 
-    def run(self, max_iter, tol, threads, block=PASS_ITERATIONS, freeze=None, first=1):
+    def run(self, max_iter, tol, threads, block=PASS_ITERATIONS, freeze=None, first=1, beliefs=None):
         """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
 
         Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
@@ -329,9 +331,17 @@ class PackedBlock:
         iteration of every cell decides. ``freeze=0`` freezes only tiles that did not move at
         all, which changes nothing.
 
+        With ``beliefs`` (a float64 [h, w] array) a whole-grid pass that is likely the last (it ends at max_iter,
+        the rate predicts tol within it, or it confirms settled tiles) also writes the beliefs after it there,
+        while it has each row in cache; :attr:`beliefs_written` then says whether the last pass did (else
+        call :meth:`beliefs`). Only when every cell of every row sends (no mask).
+
         Returns the list of per-iteration largest changes (NaN where not measured, and for the
         last one if max_iter ends the run before a whole-grid iteration confirmed a settled one).
         """
+        fusable = beliefs is not None and not self.use_act and self.row_range == (0, self.h) and self.h > 0
+        self.beliefs_written = False
+        confirm = False  # the whole-grid iteration after the moving tiles settled
         if freeze is None:
             freeze = FREEZE * tol
         changes = []
@@ -347,12 +357,16 @@ class PackedBlock:
         measured = []  # (iterations done, change) after each pass: the rate of convergence
         while len(changes) < max_iter:
             n = min(size, block, max_iter - len(changes))
-            if len(measured) >= 2:  # the last pass stops near tol, not up to block - 1 iterations beyond it
-                n = min(n, _iterations_to_tol(*measured[-2:], tol))
+            predicted = _iterations_to_tol(*measured[-2:], tol) if len(measured) >= 2 else 1 << 30
+            n = min(n, predicted)  # the last pass stops near tol, not up to block - 1 iterations beyond it
+            last = n == max_iter - len(changes) or n == predicted or confirm  # likely the last pass
+            self.beliefs_written = with_beliefs = fusable and active is None and last
             args, stages, cb = self._pass_arguments(n, threads, True, active)
             for stage in range(stages):  # the bands, then the gaps between them
-                _pass(*args, stage)  # the numba pass: every message update happens in there
+                # the numba pass: every message update happens in there
+                _pass(*args, stage, beliefs if with_beliefs else NO_BELIEFS, with_beliefs)
             change, per_tile = self._pass_change(cb, True, sparse)
+            confirm = False
             changes.extend([float("nan")] * (n - 1) + [change])
             whole_grid = active is None
             measured.append((len(changes), change))
@@ -361,7 +375,7 @@ class PackedBlock:
             if change < tol:
                 if active is None:
                     break  # an iteration of every cell moved no message by tol
-                active, size = None, 1  # the moving tiles settled: one full iteration decides
+                active, size, confirm = None, 1, True  # the moving tiles settled: one full iteration decides
                 continue
             if sparse:
                 moving = per_tile > freeze

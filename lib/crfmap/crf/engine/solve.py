@@ -87,10 +87,13 @@ def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, mes
         return EngineResult(beliefs_from_messages(unary, msg), msg, changes, {}, states)
     packed, states = _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fused)
     t.append(time.perf_counter())
-    changes = (packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if messages is not None else block)
+    beliefs = beliefs_buffer(shape)  # the last pass writes them when it can (PackedBlock.run)
+    changes = (packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if messages is not None else block,
+                          beliefs=beliefs)
                if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
     t.append(time.perf_counter())
-    beliefs = packed.beliefs(beliefs_buffer(shape))
+    if not (packed.active_cells and packed.beliefs_written):
+        packed.beliefs(beliefs)
     packed.un = None  # the result keeps only the packed messages
     # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped
     msg = lambda: packed.messages(np.empty((4,) + shape, dtype) if states is None else  # noqa: E731
