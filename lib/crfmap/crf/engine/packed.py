@@ -320,7 +320,7 @@ class PackedBlock:
 
         Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
         its last (start at 1 after a warm start, which may stop at once; at ``block`` from
-        uniform messages, which never do: then two passes of ``block / 2`` first). Once two passes
+        uniform messages, which never do: then, with a tol, two passes of ``block / 2`` first). Once two passes
         measured, a pass is cut to the iterations the last two changes' rate predicts to reach
         ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up to ``block - 1``
         iterations past it. With ``freeze`` (a change smaller than ``tol``;
