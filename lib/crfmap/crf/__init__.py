@@ -46,6 +46,7 @@ _API = {
     "Sweep": "inference.schedules",
     "Thesis": "inference.schedules",
     "near_known": "inference.regions",
+    "near_cells": "inference.regions",
     "disc_region": "inference.regions",
     "exact_marginals": "inference.exact",
     "reference_lbp": "inference.reference",

@@ -30,11 +30,11 @@ import numpy as np
 from numba import njit
 
 from crfmap.crf.engine.incremental import IncrementalLBP
-from crfmap.crf.inference.regions import near_known
+from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.inference.result import LBPResult
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
 from crfmap.errors import InputError
-from crfmap.grid import UNKNOWN, OccupancyGrid
+from crfmap.grid import OccupancyGrid
 from crfmap.mapping import builder
 from crfmap.recording import ScanSet
 
@@ -206,8 +206,7 @@ class OnlineMapper:
         if self.margin is None:
             return np.ones((self.height, self.width), bool)
         observed = (self.hits.occupied > 0) | (self.hits.empty > 0)
-        # near_known dilates the cells that are not 0.5; mark every observed one so
-        return near_known(np.where(observed, 1.0, UNKNOWN), self.margin)
+        return near_cells(observed, self.margin)
 
     def beliefs(self) -> OccupancyGrid:
         """The current LBP beliefs P(occupied) of every cell."""

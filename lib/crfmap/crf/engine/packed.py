@@ -315,7 +315,8 @@ class PackedBlock:
         _tile_max(cb, TILE_COLS, self.w, tiles)
         return float(tiles.max()) if tiles.size else 0.0, tiles
 
-    def run(self, max_iter, tol, threads, block=PASS_ITERATIONS, freeze=None, first=1, beliefs=None):
+    def run(self, max_iter, tol, threads, block=PASS_ITERATIONS, freeze=None, first=1, beliefs=None,
+            confirm_settled=True):
         """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
 
         Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
@@ -328,7 +329,8 @@ class PackedBlock:
         more than ``freeze`` in a measured iteration, only those tiles and their four
         neighbours iterate in the next pass; the others ("frozen") keep their messages, which
         last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one
-        iteration of every cell decides. ``freeze=0`` freezes only tiles that did not move at
+        iteration of every cell decides (``confirm_settled`` False: the run ends there, unconfirmed, for a
+        caller that iterates on and confirms itself). ``freeze=0`` freezes only tiles that did not move at
         all, which changes nothing.
 
         With ``beliefs`` (a float64 [h, w] array) a whole-grid pass that is likely the last (it ends at max_iter,
@@ -373,8 +375,8 @@ class PackedBlock:
             halves -= 1
             size = size if halves > 0 else 2 * size
             if change < tol:
-                if active is None:
-                    break  # an iteration of every cell moved no message by tol
+                if active is None or not confirm_settled:
+                    break  # an iteration of every cell moved no message by tol (or the caller confirms)
                 active, size, confirm = None, 1, True  # the moving tiles settled: one full iteration decides
                 continue
             if sparse:

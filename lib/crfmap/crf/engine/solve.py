@@ -72,7 +72,8 @@ def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, mes
                                                       np.float32 if mixed else dtype)
         if packed is None:
             return EngineResult(beliefs, lambda: initial_messages(shape, dtype), [0.0][:max_iter], {}, None)
-        changes = packed.run(max_iter - 1 if mixed else max_iter, tol, threads, block=block, freeze=freeze, first=block)
+        changes = packed.run(max_iter - 1 if mixed else max_iter, tol, threads, block=block, freeze=freeze, first=block,
+                             confirm_settled=not mixed)  # float64 confirms
         if mixed:  # float64 from float32's messages, at least one iteration, until one moves none by tol
             packed = packed.widened(tables, prob, link, box[0], box[2])
             changes += packed.run(max_iter - len(changes), tol, threads, block=block, freeze=freeze)

@@ -34,10 +34,21 @@ def near_known(grid, margin: int) -> np.ndarray:
     >>> m.astype(int).tolist()
     [[0, 0, 1, 1]]
     """
-    g = as_grid(grid)
-    if not (isinstance(margin, (int, np.integer)) and margin >= 0):
+    return near_cells(as_grid(grid).known(), margin)
+
+
+def near_cells(mask, margin: int) -> np.ndarray:
+    """Boolean [y, x] mask of cells within ``margin`` cells (Chebyshev distance) of a True cell of ``mask``
+    (:func:`near_known` of a grid whose observed cells are ``mask``).
+
+    >>> near_cells(np.array([[False, False, False, True]]), 2).astype(int).tolist()
+    [[0, 1, 1, 1]]
+    """
+    if not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool) and margin >= 0):
         raise InputError("margin", f"must be a non-negative whole number of cells, got {margin!r}")
-    mask = g.known()
+    mask = np.asarray(mask, dtype=bool)
+    if mask.ndim != 2:
+        raise InputError("mask", f"expected a 2-D [y, x] mask, got shape {mask.shape}")
     # a separable max-filter: dilate rows, then columns, by margin cells
     for axis in (0, 1):
         out = mask.copy()

@@ -50,7 +50,7 @@ import numpy as np
 from numba import njit
 
 from crfmap.crf.inference.lbp import infer
-from crfmap.crf.inference.regions import near_known
+from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
 from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
@@ -208,7 +208,7 @@ class Preset:
         """Cells LBP runs on: within ``margin`` cells of an observed cell (None: all)."""
         if self.margin is None:
             return None
-        return near_known(np.where(np.asarray(observed, bool), 1.0, 0.5), int(self.margin))
+        return near_cells(observed, int(self.margin))
 
     def refine(self, grid=None, hits=None, passes=None, within=None, **options):
         """Run LBP with this preset: on counts (``hits``, ``passes``) or on a grid's P.
