@@ -150,7 +150,8 @@ def _bounded_uniform_block(prob, tables, link, floor, active, dtype):
     Only the box is packed (:func:`_packed_box`): outside it every message stays uniform, so a cell's belief
     there is its floored observation.
     """
-    beliefs = np.clip(link_unary(prob, link), floor, 1.0 - floor)
+    beliefs = link_unary(prob, link)
+    np.clip(beliefs, floor, 1.0 - floor, out=beliefs)
     return (beliefs,) + _packed_box(prob, tables, link, floor, active, dtype)
 
 

@@ -244,7 +244,7 @@ class Preset:
         options.setdefault("tol", 1e-5)
         result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
         if own is not None:  # outside the preset's region nothing was inferred: keep the observation
-            result.beliefs = result.beliefs.with_probability(np.where(own, result.beliefs.probability, unary))
+            np.copyto(result.beliefs.probability, unary, where=~own)  # the result's own array: checked, in [0, 1]
         if self.temperature != 1.0:  # the whole output, observation-only cells too
             probability = temper(result.beliefs.probability, self.temperature)
             result.beliefs = result.beliefs.with_probability(probability.astype(result.beliefs.probability.dtype))
