@@ -197,14 +197,18 @@ def _start_row(prob, y, link, floor, co, lo, hi, fu, fr, fa, fb, s, r0, r1, un):
     else:
         for x in range(w):
             fu[x] = unary_odds(prob[y, x], link, floor)
-    if own:
+    if own:  # cells 2m and 2m + 1 sit at plane index m + 1 of colours ce and 1 - ce: one unit-stride loop over
+        # the pairs (a loop per colour reading every other odds vectorised poorly: 0.25 ns a cell, most of packing)
+        ce = y & 1
+        cq = 1 - ce
+        for m in range(w >> 1):
+            un[ce, y + 1, m + 1] = fu[2 * m]
+            un[cq, y + 1, m + 1] = fu[2 * m + 1]
+        if w & 1:
+            un[ce, y + 1, (w >> 1) + 1] = fu[w - 1]
         for c in range(2):
-            off = (y + c) & 1
-            n = (w - off + 1) >> 1
             un[c, y + 1, 0] = one
-            for k in range(1, n + 1):
-                un[c, y + 1, k] = fu[2 * k - 2 + off]
-            for k in range(n + 1, wp):
+            for k in range(((w - ((y + c) & 1) + 1) >> 1) + 1, wp):
                 un[c, y + 1, k] = one
     off = y & 1  # red cells: colour 0
     n = (w - off + 1) >> 1
