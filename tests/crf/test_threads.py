@@ -2,6 +2,7 @@
 import sys
 import time
 
+import numba
 import numpy as np
 import pytest
 from numba import njit
@@ -50,6 +51,23 @@ def test_an_error_in_any_call_is_raised_after_every_thread_finished():
     assert sorted(finished) == [0, 2]
 
 
+def test_an_error_in_the_calling_thread_s_own_call_is_the_one_raised():
+    """Call 0 runs on the calling thread: its exception (not a failure of the clean-up) reaches the caller, once the
+    other thread finished its calls."""
+    finished = []
+
+    def work(k):
+        if k == 0:
+            raise KeyError("call 0 failed")
+        time.sleep(0.05)
+        finished.append(k)
+
+    with pytest.raises(KeyError, match="call 0 failed"):
+        run_all(work, [(k,) for k in range(4)], 2)
+    assert sorted(finished) == [1, 3]
+
+
+@pytest.mark.skipif(bool(numba.config.DISABLE_JIT), reason="inspects numba dispatchers; NUMBA_DISABLE_JIT=1 leaves none")
 def test_every_row_band_kernel_releases_the_gil():
     """Kernels taking a band (r0, r1) last are run on threads: compiled nogil, or the threads would take turns."""
     import crfmap.crf.engine._layout

@@ -75,8 +75,9 @@ def run_all(kernel, calls, threads=None) -> list:
         return _run_group(kernel, calls)
     pool = _pool(n - 1)
     pending = [pool.submit(_run_group, kernel, calls[t::n]) for t in range(1, n)]
+    groups = []  # bound before the try: a failing call of this thread's own is then what gets raised
     try:
-        groups = [_run_group(kernel, calls[0::n])]
+        groups.append(_run_group(kernel, calls[0::n]))
     finally:
         groups += [future.result() for future in pending]  # every thread done before anything is raised or read
     out = [None] * len(calls)
