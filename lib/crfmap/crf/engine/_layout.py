@@ -165,89 +165,50 @@ def _pack_mask(mask, y0, x0, h, w, out, r0, r1):
             out[(x + y) & 1, y + 1, (x >> 1) + 1] = 1 if mask[y0 + y, x0 + x] else 0
 
 
-@njit(inline="always", cache=True, fastmath={"nnan", "ninf", "nsz", "contract"}, error_model="numpy")
-def _uniform_send(U, a0, a1, a2, a3, lo, hi, clamp):
-    """Odds a cell with observation odds U and uniform incoming messages sends through table a."""
-    m = (a0 * U + a1) / (a2 * U + a3)
-    return min(max(m, lo), hi) if clamp else m
-
-
-# not inlined: one compiled row for the three calls below (a call per row costs nothing)
-@njit(cache=True, error_model="numpy")
-def _start_row(prob, y, link, floor, co, lo, hi, fu, fr, fa, fb, s, r0, r1, un):
-    """Row y: its observation odds into ``un`` if the block [r0, r1) owns it, and into scratch row s of
-    ``fa`` / ``fb`` what its red cells send from uniform messages (red plane indices, 1 at the ghosts);
-    for an owned row, returns (cells outside [0, 1] or not finite, cells the link makes certain).
-    Unit-stride loops, so that they vectorise (``fr``: the red cells' odds of a row the block does not own,
-    contiguous as in its red plane)."""
-    own = r0 <= y < r1  # a bool argument passed as a literal would compile one copy per value
+@njit(inline="always", cache=True, error_model="numpy")
+def _start_row(prob, y, link, floor, co, fu, un):
+    """Row y's observation odds into ``un``; returns (cells outside [0, 1] or not finite, cells the link makes
+    certain). The check and the odds in one loop (occ and emp computed once), then the two colour planes."""
     w = prob.shape[1]
     wp = un.shape[2]
     one = co[8]
     bad = 0
     certain = 0
-    if own:  # the check and the odds in one loop: occ and emp computed once
-        for x in range(w):
-            p = prob[y, x]
-            bad += np.int64(not ((p >= 0.0) & (p <= 1.0)))  # NaN fails both; & (not and): no branches
-            occ = link[0] * p + link[1] * (1.0 - p)
-            emp = link[2] * p + link[3] * (1.0 - p)
-            certain += np.int64(((emp == 0.0) & (occ > 0.0)) | ((occ == 0.0) & (emp > 0.0)))
-            fu[x] = _odds(occ, emp, floor)
-    else:
-        for x in range(w):
-            fu[x] = unary_odds(prob[y, x], link, floor)
-    if own:  # cells 2m and 2m + 1 sit at plane index m + 1 of colours ce and 1 - ce: one unit-stride loop over
-        # the pairs (a loop per colour reading every other odds vectorised poorly: 0.25 ns a cell, most of packing)
-        ce = y & 1
-        cq = 1 - ce
-        for m in range(w >> 1):
-            un[ce, y + 1, m + 1] = fu[2 * m]
-            un[cq, y + 1, m + 1] = fu[2 * m + 1]
-        if w & 1:
-            un[ce, y + 1, (w >> 1) + 1] = fu[w - 1]
-        for c in range(2):
-            un[c, y + 1, 0] = one
-            for k in range(((w - ((y + c) & 1) + 1) >> 1) + 1, wp):
-                un[c, y + 1, k] = one
-    off = y & 1  # red cells: colour 0
-    n = (w - off + 1) >> 1
-    if not own:
-        for k in range(1, n + 1):
-            fr[k] = fu[2 * k - 2 + off]
-    _uniform_sends(un[0, y + 1] if own else fr, fa[s], fb[s], n, co, lo, hi)
+    for x in range(w):
+        p = prob[y, x]
+        bad += np.int64(not ((p >= 0.0) & (p <= 1.0)))  # NaN fails both; & (not and): no branches
+        occ = link[0] * p + link[1] * (1.0 - p)
+        emp = link[2] * p + link[3] * (1.0 - p)
+        certain += np.int64(((emp == 0.0) & (occ > 0.0)) | ((occ == 0.0) & (emp > 0.0)))
+        fu[x] = _odds(occ, emp, floor)
+    # cells 2m and 2m + 1 sit at plane index m + 1 of colours ce and 1 - ce: one unit-stride loop over the pairs
+    # (a loop per colour reading every other odds vectorised poorly: 0.25 ns a cell, most of packing)
+    ce = y & 1
+    cq = 1 - ce
+    for m in range(w >> 1):
+        un[ce, y + 1, m + 1] = fu[2 * m]
+        un[cq, y + 1, m + 1] = fu[2 * m + 1]
+    if w & 1:
+        un[ce, y + 1, (w >> 1) + 1] = fu[w - 1]
+    for c in range(2):
+        un[c, y + 1, 0] = one
+        for k in range(((w - ((y + c) & 1) + 1) >> 1) + 1, wp):
+            un[c, y + 1, k] = one
     return bad, certain
 
 
-@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "contract"}, error_model="numpy")  # not inlined: keeps its own flags
-def _uniform_sends(red, fa, fb, n, co, lo, hi):
-    """fa[k], fb[k]: what red cell k (odds ``red[k]``, k = 1 .. n) sends through the E/N and W/S tables; 1 elsewhere."""
-    clamp = co[9] != 0
-    one = co[8]
-    fa[0] = one
-    fb[0] = one
-    for k in range(1, n + 1):
-        u = red[k]
-        fa[k] = _uniform_send(u, co[0], co[1], co[2], co[3], lo, hi, clamp)
-        fb[k] = _uniform_send(u, co[4], co[5], co[6], co[7], lo, hi, clamp)
-    for k in range(n + 1, fa.shape[0]):
-        fa[k] = one
-        fb[k] = one
-
-
 @njit(nogil=True, cache=True, error_model="numpy")  # no fastmath: the grid check must see NaN
-def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats, b):
-    """Whole grid from uniform messages in one trip through memory: observation odds into ``un``,
-    and the first half-sweep (red cells send; with uniform incoming messages they depend on the
-    observation only) into ``msg``: black cells' slots get what their red neighbours send, the
-    ghost rows are uniform (1), and of the red cells' slots only those at the grid's edges are
-    set (1): the next half-sweep writes all the others before anything reads them. Also counts
-    per row block, into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link
-    makes certain (hard evidence).
+def _pack_start(prob, link, floor, co, un, msg, stats, b):
+    """Whole grid from uniform messages in one trip through memory: observation odds into ``un``, and of the
+    message slots only those no neighbour ever sends into (at the grid's edges) and the ghost rows, uniform (1).
+    The first pass sends the red cells' first half-sweep from the odds alone (``uniform_start`` of
+    :func:`crfmap.crf.engine._message_update._pass`) into every black cell's other slots, and the black cells
+    then send into every red cell's before anything reads them: no message plane is filled. Also counts per
+    row block, into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard
+    evidence).
 
     Rows go in ``stats.shape[0]`` blocks; this call does block ``b`` (blocks are independent, so
-    threads may run them at once). A block keeps three rows of what red cells send (E/N table, W/S
-    table) in a scratch, computing the rows just outside it again.
+    threads may run them at once).
     """
     h, w = prob.shape
     wp = un.shape[2]
@@ -256,59 +217,23 @@ def _pack_start(prob, link, floor, co, lo, hi, un, msg, stats, b):
     r0 = b * h // nblocks
     r1 = (b + 1) * h // nblocks
     fu = np.empty(w, un.dtype)  # one row of observation odds
-    fr = np.empty(wp, un.dtype)  # the red cells' odds of a row outside the block, as in its red plane
-    fa = np.ones((3, wp + 1), un.dtype)  # [row % 3, red plane index]
-    fb = np.ones((3, wp + 1), un.dtype)
     bad = 0
     certain = 0
-    if r0 > 0:
-        _start_row(prob, r0 - 1, link, floor, co, lo, hi, fu, fr, fa, fb, (r0 - 1) % 3, r0, r1, un)
-    if r0 < r1:
-        nb, nc = _start_row(prob, r0, link, floor, co, lo, hi, fu, fr, fa, fb, r0 % 3, r0, r1, un)
+    for y in range(r0, r1):
+        nb, nc = _start_row(prob, y, link, floor, co, fu, un)
         bad += nb
         certain += nc
-    for y in range(r0, r1):
-        if y + 1 < h:
-            nb, nc = _start_row(prob, y + 1, link, floor, co, lo, hi, fu, fr, fa, fb, (y + 1) % 3, r0, r1, un)
-            bad += nb
-            certain += nc
-        # red cells' slots: the black cells send into all of them in the first half-sweep of the
-        # next pass, except those no neighbour sends into (at the grid's edges): only those are set
-        off = y & 1
-        if off == 0:
-            msg[0, 0, y + 1, 1] = one  # x = 0: no west neighbour
-        if (w - 1 + y) & 1 == 0:
-            msg[0, 1, y + 1, (w - 1) // 2 + 1] = one  # x = w - 1: no east neighbour
-        if y == 0:
-            for k in range(wp):
-                msg[0, 2, 1, k] = one
-        if y == h - 1:
-            for k in range(wp):
-                msg[0, 3, h, k] = one
-        # black cells of row y (plane index k) hear from their west (slot 0), east (1), south
-        # (2, row y - 1) and north (3, row y + 1) neighbours; red plane indices as in _send
-        s, up, down = y % 3, (y + 1) % 3, (y + 2) % 3
-        e = y & 1
-        n = (w - ((y + 1) & 1) + 1) >> 1
-        for k in range(1, n + 1):
-            msg[1, 0, y + 1, k] = fa[s, k - e]
-            msg[1, 1, y + 1, k] = fb[s, k - e + 1]
-        if y > 0:
-            for k in range(1, n + 1):
-                msg[1, 2, y + 1, k] = fa[down, k]
-        else:
-            for k in range(1, n + 1):
-                msg[1, 2, y + 1, k] = one
-        if y + 1 < h:
-            for k in range(1, n + 1):
-                msg[1, 3, y + 1, k] = fb[up, k]
-        else:
-            for k in range(1, n + 1):
-                msg[1, 3, y + 1, k] = one
-        for d in range(4):
-            msg[1, d, y + 1, 0] = one
-            for k in range(n + 1, wp):
-                msg[1, d, y + 1, k] = one
+        for c in range(2):  # slots no neighbour sends into: x = 0 (west), x = w - 1 (east), rows 0 and h - 1
+            if (y + c) & 1 == 0:
+                msg[c, 0, y + 1, 1] = one
+            if (w - 1 + y + c) & 1 == 0:
+                msg[c, 1, y + 1, (w - 1) // 2 + 1] = one
+            if y == 0:
+                for k in range(wp):
+                    msg[c, 2, 1, k] = one
+            if y == h - 1:
+                for k in range(wp):
+                    msg[c, 3, h, k] = one
     stats[b, 0] = bad
     stats[b, 1] = certain
     if b == 0:  # the ghost rows

@@ -220,6 +220,37 @@ def _send_masked(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, t
             cb[ty, j] = cc + max(d - cc, zero)
 
 
+@njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
+def _uniform_row(msg, un, y, w, co, lo, hi):
+    """The red cells of row y send from uniform incoming messages (the first half-sweep of a whole-grid run from
+    uniform messages): what :func:`_send_whole` computes with every incoming odds 1, without loading them (the
+    packing then writes no message a red cell sends: one trip through memory fewer)."""
+    o, y1, j0, e0, w0 = _row_columns(0, y, 0)
+    a0, a1, a2, a3 = co[0], co[1], co[2], co[3]
+    b0, b1, b2, b3 = co[4], co[5], co[6], co[7]
+    one = co[8]
+    zero = one - one
+    n = (w - (y & 1) + 1) >> 1
+    if co[9] == zero:  # as in _send_whole: a table with positive entries never leaves [lo, hi]
+        for i in range(n):
+            ui = np.uint64(i)
+            j = j0 + ui
+            mE, mW, mN, mS = _four_unclamped(un[0, y1, j], one, one, one, one, a0, a1, a2, a3, b0, b1, b2, b3)
+            msg[o, 0, y1, e0 + ui] = mE
+            msg[o, 1, y1, w0 + ui] = mW
+            msg[o, 2, y1 + 1, j] = mN
+            msg[o, 3, y, j] = mS
+    else:
+        for i in range(n):
+            ui = np.uint64(i)
+            j = j0 + ui
+            mE, mW, mN, mS = _four(un[0, y1, j], one, one, one, one, a0, a1, a2, a3, b0, b1, b2, b3, lo, hi)
+            msg[o, 0, y1, e0 + ui] = mE
+            msg[o, 1, y1, w0 + ui] = mW
+            msg[o, 2, y1 + 1, j] = mN
+            msg[o, 3, y, j] = mS
+
+
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _cell(msg, un, act, c, y, k, h, w, co, lo, hi):
     """One cell sends, whatever neighbours it has (grid edges); returns the largest change."""
@@ -291,9 +322,10 @@ def _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo,
 # No branch on which trapezoid calls: LLVM would unswitch the loop on it, compiling the rows twice
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, measure_from, cb, count, j_from, dj,
-                y_from, dy, y0, y1, ylo, yhi):
+                y_from, dy, y0, y1, ylo, yhi, uniform_start):
     """Phase j_from + t dj on row y_from + t dy for 0 <= t < count, rows kept in [y0, y1) shrunk by j at inner edges
-    (edges at ``ylo`` / ``yhi`` do not shrink): one wavefront step of a band or one phase of a gap."""
+    (edges at ``ylo`` / ``yhi`` do not shrink): one wavefront step of a band or one phase of a gap. With
+    ``uniform_start`` phase 0 sends from uniform messages (:func:`_uniform_row`; whole grid, unmeasured)."""
     for t in range(count):
         j = j_from + t * dj
         y = y_from + t * dy
@@ -301,8 +333,11 @@ def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, 
         hi_row = y1 - j if y1 < yhi else yhi
         if y < lo_row or y >= hi_row:
             continue
-        _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi, (j >> 1) >= measure_from,
-                   cb)
+        if uniform_start and j == 0:
+            _uniform_row(msg, un, y, w, co, lo, hi)
+        else:
+            _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, j & 1, y, h, w, co, lo, hi,
+                       (j >> 1) >= measure_from, cb)
 
 
 # --- passes ----------------------------------------------------------------------------------
@@ -314,14 +349,14 @@ def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y0, y1, ylo, yhi, phases, measure_from,
-               cb, first_phase, gap, bel, with_beliefs):
+               cb, uniform_start, gap, bel, with_beliefs):
     """The trapezoid of the band on rows [y0, y1) (``gap`` False), or the inverted one around the band edge y1.
 
     Band: phase j covers the band's rows shrunk by j at inner edges (edges at ``ylo`` / ``yhi``, the
     first / last row that has senders, do not shrink). Wavefront order: at step s, phase j works on
     row s - j, so the rows a phase needs were finished by phase j - 1 one step earlier and every live
-    row stays in cache. Phases before ``first_phase`` were done already (e.g. the first half-sweep,
-    while packing). Gap: phase j on rows [y1 - j, y1 + j), for 1 <= j < phases.
+    row stays in cache. ``uniform_start``: phase 0 sends from uniform messages without loading them. Gap: phase
+    j on rows [y1 - j, y1 + j), for 1 <= j < phases.
 
     ``with_beliefs`` (the whole grid sends: ylo = 0, yhi = h): each row's beliefs go into ``bel`` as soon as it
     and its two neighbours finished the last phase, while they are in cache. A band does rows [y0 + phases,
@@ -331,12 +366,12 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
     blo = y0 + phases if y0 > ylo else ylo
     bhi = y1 - phases if y1 < yhi else yhi
     # one call site of the rows: each would hold its own compiled copy of them
-    for u in range(1 if gap else y0 + first_phase, phases if gap else y1 + phases):
-        y_from = max(y1 - u, ylo) if gap else u - first_phase
-        count = min(y1 + u, yhi) - y_from if gap else phases - first_phase
+    for u in range(1 if gap else y0, phases if gap else y1 + phases):
+        y_from = max(y1 - u, ylo) if gap else u
+        count = min(y1 + u, yhi) - y_from if gap else phases
         _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, measure_from, cb, count,
-                    u if gap else first_phase, 0 if gap else 1, y_from, 1 if gap else -1,
-                    ylo if gap else y0, yhi if gap else y1, ylo, yhi)
+                    u if gap else 0, 0 if gap else 1, y_from, 1 if gap else -1,
+                    ylo if gap else y0, yhi if gap else y1, ylo, yhi, uniform_start)
         if with_beliefs and not gap and blo <= u - phases < bhi:
             _beliefs_row(un, msg, u - phases, w, bel)
     if with_beliefs and gap:
@@ -349,13 +384,14 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
 # one parallel loop for both stages (not one each): its compile, the first call's wait, is a third shorter
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations, measure_from, cb,
-          first_phase, stage, bel, with_beliefs):
+          uniform_start, stage, bel, with_beliefs):
     """Stage ``stage`` of ``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
     A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the
     inverted trapezoids between bands; nothing to do with one band). Rows outside [edges[0],
     edges[-1]) must hold no sender. Iterations from ``measure_from`` on are measured
-    (max-accumulated together into ``cb``); half-sweeps before ``first_phase`` (0 or 1) were done already.
+    (max-accumulated together into ``cb``); ``uniform_start`` (whole grid, from uniform messages): the red cells'
+    first half-sweep loads no message.
     ``with_beliefs`` (every cell sends, edges from 0 to h): the beliefs after the pass into ``bel`` [h, w], row by
     row while the pass has it in cache (one trip through memory fewer than a beliefs pass after it).
     """
@@ -363,7 +399,7 @@ def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges,
     nb = edges.shape[0] - 1
     for b in prange(nb - stage):
         _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges[b], edges[b + 1], edges[0],
-                   edges[nb], phases, measure_from, cb, first_phase, stage == 1, bel, with_beliefs)
+                   edges[nb], phases, measure_from, cb, uniform_start, stage == 1, bel, with_beliefs)
     return 0
 
 

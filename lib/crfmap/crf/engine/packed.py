@@ -115,7 +115,7 @@ class PackedBlock:
         self._extents_changed()
         self.cell_updates = 0  # cells that sent, summed over iterations (work done)
         self.beliefs_written = False  # whether the last pass of run() wrote the beliefs
-        self.first_phase = 0  # 1: the next pass's first half-sweep was done while packing (start_uniform)
+        self.uniform_start = False  # the next pass's first half-sweep sends from uniform messages (start_uniform)
 
     # --- filling it ---------------------------------------------------------------------------
     def set_unary(self, probability, link, y0=0, x0=0):
@@ -124,20 +124,20 @@ class PackedBlock:
         over_rows(_pack_unary, self.h, probability, y0, x0, self.h, self.w, link, self.floor, self.un)
 
     def start_uniform(self, probability, link, threads=1):
-        """Whole-grid block from uniform messages: :meth:`set_unary` and the first half-sweep at once.
+        """Whole-grid block from uniform messages: :meth:`set_unary` and the edges' message slots in one trip.
 
-        Packing then also does what the red cells send in the first iteration (from uniform
-        messages it depends on their observations only), so the next :meth:`run_pass` starts
-        with the black cells; it must run at least two iterations (its measured iteration
-        would otherwise miss the red cells' changes). Returns (cells of ``probability``
+        Packing writes the observation odds and only the message slots no neighbour sends into; the next
+        :meth:`run_pass` sends the red cells' first half-sweep from the odds alone (from uniform messages it
+        depends on the observations only) without loading a message, so no plane is filled with ones. That pass
+        must run at least two iterations of the whole grid. Returns (cells of ``probability``
         outside [0, 1] or not finite, cells ``link`` makes certain): a caller with either must
         not use the result (check the grid; clamp certain cells on the unfused path).
         """
         link = np.asarray(link, np.float64).ravel()
         stats = np.zeros((max(1, min(4 * int(threads), self.h)), 2), np.int64)
-        run_all(_pack_start, [(probability, link, self.floor, self.co, self.lo, self.hi, self.un, self.msg, stats, b)
+        run_all(_pack_start, [(probability, link, self.floor, self.co, self.un, self.msg, stats, b)
                               for b in range(stats.shape[0])], threads)
-        self.first_phase = 1
+        self.uniform_start = True
         return int(stats[:, 0].sum()), int(stats[:, 1].sum())
 
     def set_messages(self, messages, y0=0, x0=0):
@@ -298,11 +298,11 @@ class PackedBlock:
         measure_from = iterations - 1 if measure else iterations
         args = (self.msg, self.un, self.act if self.use_act else NO_MASK, self.lo_k, self.hi_k, segs, nseg, TILE_ROWS,
                 self.h, self.w, self.co, self.lo, self.hi)
-        if self.first_phase and (iterations < 2 or active is not None or self.use_act):
+        if self.uniform_start and (iterations < 2 or active is not None or self.use_act):
             raise ValueError("the pass after start_uniform must run at least two iterations of the whole grid")
-        first, self.first_phase = self.first_phase, 0
+        uniform, self.uniform_start = self.uniform_start, False
         self.cell_updates += (self.active_cells if active is None else cells) * iterations
-        return args + (edges, int(iterations), int(measure_from), cb, first), min(2, len(edges) - 1), cb
+        return args + (edges, int(iterations), int(measure_from), cb, uniform), min(2, len(edges) - 1), cb
 
     def _pass_change(self, cb, measure, per_tile):
         """The largest change of a pass's measured iteration, and per tile (see :meth:`run_pass`)."""
