@@ -117,6 +117,16 @@ def _send_compiled(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb,
 
 
 @njit(inline="always", cache=True)
+def _sent(msg, o, y, y1, j, east, west, mE, mW, mN, mS):
+    """A cell at plane index j of stored row y1 = y + 1 has sent: its messages into the slots of its east and west
+    neighbours (plane indices ``east``, ``west`` in the other colour ``o``) and of those in the rows above and below."""
+    msg[o, 0, y1, east] = mE
+    msg[o, 1, y1, west] = mW
+    msg[o, 2, y1 + 1, j] = mN
+    msg[o, 3, y, j] = mS
+
+
+@njit(inline="always", cache=True)
 def _row_columns(c, y, k0):
     """(the other colour, the stored row, the stored column of cell k0 (column 0 is a ghost), its east and its
     west neighbour's column in the other plane) of a row's cells from k0 on."""
@@ -139,20 +149,14 @@ def _send_whole(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty
             j = j0 + ui
             mE, mW, mN, mS = _four_unclamped(un[c, y1, j], msg[c, 0, y1, j], msg[c, 1, y1, j], msg[c, 2, y1, j],
                                              msg[c, 3, y1, j], a0, a1, a2, a3, b0, b1, b2, b3)
-            msg[o, 0, y1, e0 + ui] = mE
-            msg[o, 1, y1, w0 + ui] = mW
-            msg[o, 2, y1 + 1, j] = mN
-            msg[o, 3, y, j] = mS
+            _sent(msg, o, y, y1, j, e0 + ui, w0 + ui, mE, mW, mN, mS)
     elif not measure:
         for i in range(n):
             ui = np.uint64(i)
             j = j0 + ui
             mE, mW, mN, mS = _four(un[c, y1, j], msg[c, 0, y1, j], msg[c, 1, y1, j], msg[c, 2, y1, j],
                                    msg[c, 3, y1, j], a0, a1, a2, a3, b0, b1, b2, b3, lo, hi)
-            msg[o, 0, y1, e0 + ui] = mE
-            msg[o, 1, y1, w0 + ui] = mW
-            msg[o, 2, y1 + 1, j] = mN
-            msg[o, 3, y, j] = mS
+            _sent(msg, o, y, y1, j, e0 + ui, w0 + ui, mE, mW, mN, mS)
     else:
         for i in range(n):
             ui = np.uint64(i)
@@ -210,10 +214,7 @@ def _send_masked(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, t
             mW = mW if on else oW
             mN = mN if on else oN
             mS = mS if on else oS
-            msg[o, 0, y1, e0 + ui] = mE
-            msg[o, 1, y1, w0 + ui] = mW
-            msg[o, 2, y1 + 1, j] = mN
-            msg[o, 3, y, j] = mS
+            _sent(msg, o, y, y1, j, e0 + ui, w0 + ui, mE, mW, mN, mS)
             d = max(max(_dp(mE, oE, one), _dp(mW, oW, one)),
                     max(w_n * _dp(mN, oN, one), w_s * _dp(mS, oS, one)))
             cc = cb[ty, j]
@@ -236,19 +237,13 @@ def _uniform_row(msg, un, y, w, co, lo, hi):
             ui = np.uint64(i)
             j = j0 + ui
             mE, mW, mN, mS = _four_unclamped(un[0, y1, j], one, one, one, one, a0, a1, a2, a3, b0, b1, b2, b3)
-            msg[o, 0, y1, e0 + ui] = mE
-            msg[o, 1, y1, w0 + ui] = mW
-            msg[o, 2, y1 + 1, j] = mN
-            msg[o, 3, y, j] = mS
+            _sent(msg, o, y, y1, j, e0 + ui, w0 + ui, mE, mW, mN, mS)
     else:
         for i in range(n):
             ui = np.uint64(i)
             j = j0 + ui
             mE, mW, mN, mS = _four(un[0, y1, j], one, one, one, one, a0, a1, a2, a3, b0, b1, b2, b3, lo, hi)
-            msg[o, 0, y1, e0 + ui] = mE
-            msg[o, 1, y1, w0 + ui] = mW
-            msg[o, 2, y1 + 1, j] = mN
-            msg[o, 3, y, j] = mS
+            _sent(msg, o, y, y1, j, e0 + ui, w0 + ui, mE, mW, mN, mS)
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
