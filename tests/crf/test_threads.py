@@ -36,35 +36,23 @@ def test_results_come_back_in_call_order_on_any_thread_count():
         assert run_all(lambda k: k * k, calls, threads) == [k * k for k in range(7)]
 
 
-def test_an_error_in_any_call_is_raised_after_every_thread_finished():
+@pytest.mark.parametrize("failing, error, others", [
+    (1, ValueError, [0, 2]),  # thread 1 (calls 1, 3) stops at its first failing call; thread 0 finishes its own
+    (0, KeyError, [1, 3]),  # the calling thread's own call: its exception, not a failure of the clean-up, is raised
+])
+def test_an_error_in_any_call_is_raised_after_every_thread_finished(failing, error, others):
     """A thread stops at its first failing call (its later calls do not run); the others finish theirs."""
     finished = []
 
     def work(k):
-        if k == 1:
-            raise ValueError("call 1 failed")
+        if k == failing:
+            raise error(f"call {k} failed")
         time.sleep(0.05)
         finished.append(k)
 
-    with pytest.raises(ValueError, match="call 1 failed"):
-        run_all(work, [(k,) for k in range(4)], 2)  # thread 0: calls 0, 2; thread 1: calls 1, 3
-    assert sorted(finished) == [0, 2]
-
-
-def test_an_error_in_the_calling_thread_s_own_call_is_the_one_raised():
-    """Call 0 runs on the calling thread: its exception (not a failure of the clean-up) reaches the caller, once the
-    other thread finished its calls."""
-    finished = []
-
-    def work(k):
-        if k == 0:
-            raise KeyError("call 0 failed")
-        time.sleep(0.05)
-        finished.append(k)
-
-    with pytest.raises(KeyError, match="call 0 failed"):
-        run_all(work, [(k,) for k in range(4)], 2)
-    assert sorted(finished) == [1, 3]
+    with pytest.raises(error, match=f"call {failing} failed"):
+        run_all(work, [(k,) for k in range(4)], 2)  # thread 0 (the caller): calls 0, 2; thread 1: calls 1, 3
+    assert sorted(finished) == others
 
 
 @pytest.mark.skipif(bool(numba.config.DISABLE_JIT), reason="inspects numba dispatchers; NUMBA_DISABLE_JIT=1 leaves none")

@@ -11,7 +11,8 @@ point as :func:`crfmap.crf.inference._plain_kernels._send_rows`
   of a sender are ``R = U * r_a * r_b * r_c`` (U the observation's odds) and the message it
   sends through a table t (rows receiver, columns sender) is
   ``r' = (t00 R + t01) / (t10 R + t11)``: three multiplies, two FMAs and one division, where
-  the probability form needs twice the multiplies. The division is the bottleneck (4 per cell).
+  the probability form needs twice the multiplies; four divisions a cell, which do not bound its rate
+  (a two-division variant measured slower: the speed issue's notes).
 - **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`crfmap.crf.engine.messages`) of
   the cell in row y with colour c = (x + y) & 1 and x = 2k + ((y + c) & 1). A colour's cells
   are then contiguous: a half-sweep is a unit-stride loop that vectorises. Row 0 / H + 1 and

@@ -45,7 +45,7 @@ class EngineResult(NamedTuple):
 
 
 def fused_start_applies(grid, tables, max_iter, block, region, messages) -> bool:
-    """Whether :func:`solve` may pack ``grid`` with the first half-sweep and check it on the way:
+    """Whether :func:`solve` may pack ``grid`` in one trip (:meth:`PackedBlock.start_uniform`) and check it on the way:
     a C-ordered float64 2-D array, whole grid, uniform start, a first pass of >= 2 iterations,
     and tables under which no observation-free certainty exists."""
     return (isinstance(grid, np.ndarray) and grid.dtype == np.float64 and grid.ndim == 2 and grid.size > 0
@@ -90,11 +90,11 @@ def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, mes
     packed, states = _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fused)
     t.append(time.perf_counter())
     beliefs = beliefs_buffer(shape)  # the last pass writes them when it can (PackedBlock.run)
-    changes = (packed.run(max_iter, tol, threads, block=block, freeze=freeze, first=1 if messages is not None else block,
-                          beliefs=beliefs)
+    changes = (packed.run(max_iter, tol, threads, block=block, freeze=freeze,
+                          first=1 if messages is not None else block, beliefs=beliefs)
                if packed.active_cells else [0.0][:max_iter])  # every cell clamped: nothing to do
     t.append(time.perf_counter())
-    if not (packed.active_cells and packed.beliefs_written):
+    if not packed.beliefs_written:  # also when every cell is clamped (no pass ran)
         packed.beliefs(beliefs)
     packed.un = None  # the result keeps only the packed messages
     # unpacked when read; only senders' slots are unpacked under clamps, so the others start as clamped

@@ -43,8 +43,8 @@ def announce(*dispatchers, stream=None) -> bool:
 def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fused: bool = False) -> bool:
     """:func:`announce` for the kernels one :func:`crfmap.crf.inference.lbp.infer` call on ``cells`` cells runs.
 
-    ``fused``: the call packs with the first half-sweep (:meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform`)
-    instead of filling and packing the planes apart.
+    ``fused``: the call packs in one trip and fills no message plane
+    (:meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform`) instead of filling and packing the planes apart.
     """
     from crfmap.crf.engine import _layout as L
     from crfmap.crf.engine import _message_update as F
