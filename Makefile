@@ -15,15 +15,15 @@ all: test
 
 venv: $(STAMP)
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml study/pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	# first what the numba warm-up imports; it then compiles on the core pip leaves idle while pip installs the rest
 	# (best effort: if it fails, `make warm` compiles what it missed). Not --no-compile: where PYTHONDONTWRITEBYTECODE
 	# is set (containers, CI) nothing would ever write the bytecode, and every process would compile its imports
-	$(BIN)/python -m pip install --quiet $$($(BIN)/python lib/crfmap/repro/warmup.py --requirements)
-	PYTHONPATH=lib nice -n 10 $(BIN)/python -m crfmap.repro.warmup --jobs $(CORES) > $(VENV)/early-warmup.log 2>&1 & early=$$!; \
-	  $(BIN)/python -m pip install --quiet -e ".[test]"; status=$$?; \
+	$(BIN)/python -m pip install --quiet $$($(BIN)/python study/crfstudy/repro/warmup.py --requirements)
+	PYTHONPATH=lib:study nice -n 10 $(BIN)/python -m crfstudy.repro.warmup --jobs $(CORES) > $(VENV)/early-warmup.log 2>&1 & early=$$!; \
+	  $(BIN)/python -m pip install --quiet -e ".[study,ros,test]" -e study; status=$$?; \
 	  if [ $$status != 0 ]; then kill $$early 2>/dev/null; fi; \
 	  wait $$early || echo "note: the numba warm-up during the install stopped early ($(VENV)/early-warmup.log)"; \
 	  exit $$status
@@ -39,12 +39,12 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 warm: $(STAMP)
-	$(BIN)/python -m crfmap.repro.warmup --jobs $(CORES)
+	$(BIN)/python -m crfstudy.repro.warmup --jobs $(CORES)
 
 # two pytest runs, both always run (make test fails if either does): everything but the notebooks as one process
 # (the hostile catalogue's terminal summary included), then the notebooks' quick runs in parallel, CORES at once
 test: warm
-	$(BIN)/ruff check lib tests notebooks
+	$(BIN)/ruff check lib study tests notebooks
 	status=0; \
 	$(BIN)/python -m pytest -q --ignore=tests/test_notebooks.py || status=$$?; \
 	$(BIN)/python -m pytest -q -n $(CORES) tests/test_notebooks.py || status=$$?; \
@@ -60,7 +60,7 @@ reproduce:
 	@echo $$(date +%s) > .reproduce-started
 	@test -e $(STAMP) || touch .reproduce-new-venv
 	$(MAKE) --no-print-directory warm
-	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --started-at "$$(cat .reproduce-started)" \
+	$(BIN)/python -m crfstudy.repro.reproduce --cores $(CORES) --started-at "$$(cat .reproduce-started)" \
 	  $$(test -e .reproduce-new-venv && echo --new-venv)
 	@rm -f .reproduce-started .reproduce-new-venv
 
@@ -69,10 +69,10 @@ reproduce:
 sweep:
 	@test -n "$(strip $(SWEEP))" || { echo "make sweep: give SWEEP=name (a file of workflow/sweeps/) or SWEEP=path.yaml" >&2; exit 2; }
 	$(MAKE) --no-print-directory warm
-	$(BIN)/python -m crfmap.repro.reproduce --cores $(CORES) --sweep $(SWEEP) $(if $(MAX_POINTS),--max-points $(MAX_POINTS))
+	$(BIN)/python -m crfstudy.repro.reproduce --cores $(CORES) --sweep $(SWEEP) $(if $(MAX_POINTS),--max-points $(MAX_POINTS))
 
 dry-run: $(STAMP)
-	$(BIN)/python -m crfmap.repro.reproduce --dry-run
+	$(BIN)/python -m crfstudy.repro.reproduce --dry-run
 
 lab: warm
 	$(BIN)/jupyter lab notebooks/

@@ -9,7 +9,7 @@ from crfmap.cli import main
 from crfmap.io.grid_files import load_grid, save_grid
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.inference.lbp import infer
-from crfmap.paths import data_file, have_data
+from crfmap.data import data_file, have_data
 
 OLIN = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"
 
@@ -57,7 +57,7 @@ def test_infer_margin_keeps_far_unknown_cells(tmp_path):
 
 
 def test_infer_default_is_the_default_preset(tmp_path):
-    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
 
     grid, _ = noisy_grid(3)
     save_grid(grid, tmp_path / "in.npy")
@@ -73,7 +73,7 @@ def test_infer_default_is_the_default_preset(tmp_path):
     (["--hidden", "10,1,2,10", "--pairing", "oriented"], lambda P: P.custom_preset([[10, 1], [2, 10]], pairing="oriented")),
 ])
 def test_infer_runs_a_preset_named_or_made_from_the_tables(tmp_path, argv, preset):
-    from crfmap.crf.model import presets
+    from crfmap.crf import presets
 
     grid, _ = noisy_grid(4)
     save_grid(grid, tmp_path / "in.npy")
@@ -134,7 +134,6 @@ def _bad(tmp_path):
     (["infer", "{d}/good.npy", "{d}/o.npy", "--pairing", "oriented"], ["--pairing", "certainty preset"]),
     (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "thesis", "--pairing", "receiver"], ["--pairing", "thesis"]),
     (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "thesis", "--hidden", "4,1,1,4"], ["--preset", "custom"]),
-    (["infer", "{d}/good.npy", "{d}/o.npy", "--preset", "nope"], ["--preset", "certainty", "thesis"]),
     (["metrics", "{d}/good.npy", "{d}/other.npy"], ["shape"]),
 ])
 def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, args, words):
@@ -149,7 +148,8 @@ def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, capsys, args, word
     assert not list(tmp_path.glob(".*tmp"))
 
 
-@pytest.mark.parametrize("argv", [["simulate", "nope", "out"], ["infer"], [], ["infer", "a.npy", "b.npy", "--max-iter", "x"]])
+@pytest.mark.parametrize("argv", [["simulate", "nope", "out"], ["infer"], [], ["infer", "a.npy", "b.npy", "--max-iter", "x"],
+                                  ["infer", "a.npy", "b.npy", "--preset", "nope"]])
 def test_usage_errors_are_one_line(argv, capsys):
     with pytest.raises(SystemExit) as exc:
         main(argv)

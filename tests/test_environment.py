@@ -1,4 +1,4 @@
-"""environment.yml (conda) and pyproject.toml (pip) describe the same dependencies."""
+"""environment.yml (conda) and pyproject.toml (pip) describe the same dependencies: the library's and the study's."""
 import re
 import tomllib
 from pathlib import Path
@@ -15,7 +15,8 @@ def _name(spec: str) -> str:
 def test_environment_yml_matches_pyproject():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     pip_names = {_name(d) for d in project["dependencies"]}
-    pip_names |= {_name(d) for d in project["optional-dependencies"]["test"]}
+    for extra in ("study", "ros", "test"):  # the study's full environment
+        pip_names |= {_name(d) for d in project["optional-dependencies"][extra]}
     env = yaml.safe_load((ROOT / "environment.yml").read_text())
     conda_names = set()
     for dep in env["dependencies"]:

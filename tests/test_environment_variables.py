@@ -9,7 +9,8 @@ import sys
 
 import pytest
 
-from crfmap import checks, environment, paths
+from crfmap import checks, environment
+from crfstudy import paths
 from crfmap.errors import InputError
 
 

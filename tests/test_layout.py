@@ -206,15 +206,29 @@ def test_names_are_imported_from_the_module_that_defines_them():
 
 
 def test_presets_are_the_one_place_that_names_a_preset():
-    """Outside ``crf/model/presets.py`` the library says ``DEFAULT_PRESET`` (or a preset's ``.name``), never the
+    """Outside ``crf/presets.py`` the library says ``DEFAULT_PRESET`` (or a preset's ``.name``), never the
     default preset's name as a literal: changing the default is one line."""
     import re
 
-    from crfmap.crf.model.presets import DEFAULT_PRESET, PRESETS
+    from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
 
     literal = re.compile(r"""["']({})["']""".format("|".join(map(re.escape, PRESETS))))
     offenders = [f"{p.relative_to(LIB)}:{n}: {line.strip()}" for p in sorted(LIB.rglob("*.py"))
-                 if p.relative_to(LIB).as_posix() != "crf/model/presets.py"
+                 if p.relative_to(LIB).as_posix() != "crf/presets.py"
                  for n, line in enumerate(p.read_text().splitlines(), 1)
                  if any(m.group(1) == DEFAULT_PRESET for m in literal.finditer(line))]
     assert not offenders, "\n".join(offenders)
+
+
+def test_the_library_never_imports_the_study_and_the_study_uses_public_names_only():
+    """The line between the installed library (lib/crfmap) and the study beside it (study/crfstudy): no arrow from the
+    library to the study, and the study imports no private module or name of the library."""
+    study = LIB.parents[1] / "study" / "crfstudy"
+    up = [f"{p.relative_to(LIB)}: {node.module if isinstance(node, ast.ImportFrom) else node.names[0].name}"
+          for p in LIB.rglob("*.py") for node in ast.walk(ast.parse(p.read_text()))
+          if (isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "crfstudy")
+          or (isinstance(node, ast.Import) and any(a.name.split(".")[0] == "crfstudy" for a in node.names))]
+    private = [f"{p.relative_to(study.parent)}: {mod} {names}" for p in study.rglob("*.py")
+               for mod, names, _ in _imports(p) if mod.split(".")[0] == "crfmap"
+               and (any(part.startswith("_") for part in mod.split(".")) or any(n.startswith("_") for n in names))]
+    assert study.is_dir() and not up and not private, "\n".join(up + private)

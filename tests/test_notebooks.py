@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from crfmap import paths
-from crfmap.repro.dependencies import data_needed
+from crfmap.data import data_root, have_data
+from crfstudy.repro.dependencies import data_needed
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
-MAX_CELL_LINES = 30  # a longer code cell is library code: it goes to crfmap.experiments (and gets a test)
+MAX_CELL_LINES = 30  # a longer code cell is library code: it goes to crfstudy.experiments (and gets a test)
 
 
 def long_code_cells(notebook, limit=MAX_CELL_LINES) -> list:
@@ -39,13 +39,13 @@ def test_the_cell_length_check_counts_every_line(tmp_path):
 @pytest.mark.slow  # 15 s to minutes each; `make test` runs them in parallel (pytest -n)
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_executes(notebook, tmp_path, monkeypatch):
-    from crfmap.repro.run import import_papermill
+    from crfstudy.repro.run import import_papermill
 
     pm = import_papermill()
 
-    missing = [f for f in data_needed(notebook) if not paths.have_data(f)]
+    missing = [f for f in data_needed(notebook) if not have_data(f)]
     if missing:
-        pytest.skip(f"{notebook.name} needs shared data not found under {paths.data_root()}: {', '.join(missing)} "
+        pytest.skip(f"{notebook.name} needs shared data not found under {data_root()}: {', '.join(missing)} "
                     "(see data/README.md)")
 
     monkeypatch.setenv("CRFMAP_OUTPUT_ROOT", str(tmp_path))

@@ -4,7 +4,8 @@ As root, chmod does not stop a write, so the install is made unwritable the way 
 notices it: every ``__pycache__`` of a copy of the package is a plain file (no folder can
 be made there) and ``$HOME`` is under /proc (numba's user-wide ``~/.cache`` cannot be made
 either). Without crfmap's fallback, numba then raises "no locator available"; with it, the
-kernels are cached under the temporary folder.
+kernels are cached under the temporary folder. The fallback is :func:`crfmap.prepare`'s (the entry points call
+it; importing crfmap changes nothing, tests/test_import.py).
 """
 import os
 import shutil
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import crfmap
 
-CALL = ("import os, crfmap.raycast as r; print(r._line_length(0, 0, 3, 4)); "
+CALL = ("import os, crfmap; crfmap.prepare(); import crfmap.raycast as r; print(r._line_length(0, 0, 3, 4)); "
         "print(os.environ.get('NUMBA_CACHE_DIR', '-'))")
 
 
@@ -23,7 +24,7 @@ def _read_only_install(tmp_path, with_fallback=True):
     site = tmp_path / "site"
     shutil.copytree(Path(crfmap.__file__).parent, site / "crfmap", ignore=shutil.ignore_patterns("__pycache__"))
     if not with_fallback:
-        (site / "crfmap" / "_numba_cache.py").write_text("")
+        (site / "crfmap" / "_numba_cache.py").write_text("def configure():\n    return None\n")
     for folder in [site / "crfmap", *[p for p in (site / "crfmap").rglob("*") if p.is_dir()]]:
         (folder / "__pycache__").write_text("not a folder")
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_CACHE_DIR", "XDG_CACHE_HOME"))}

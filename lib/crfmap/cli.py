@@ -14,8 +14,21 @@ import warnings
 
 from crfmap.errors import CrfmapError, one_line
 
-# Sub-command name -> module in crfmap.commands providing add_parser(subparsers) and run(args).
-COMMANDS = ("infer", "metrics", "simulate", "build", "convert", "bench", "evaluate", "node")
+# Sub-command name -> module providing add_parser(subparsers) and run(args): the library's own commands, then those
+# other installed distributions register under the entry-point group "crfmap.commands" (the study's `bench`).
+COMMANDS = {name: f"crfmap.commands.{name}" for name in ("infer", "metrics", "simulate", "build", "convert",
+                                                         "evaluate", "node")}
+ENTRY_POINT_GROUP = "crfmap.commands"
+
+
+def commands() -> dict:
+    """{name: module path} of every sub-command: the library's, then the plug-ins' (a plug-in cannot replace one)."""
+    from importlib.metadata import entry_points
+
+    found = dict(COMMANDS)
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        found.setdefault(ep.name, ep.value)
+    return found
 
 
 class _Parser(argparse.ArgumentParser):
@@ -34,13 +47,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="largest grid an input may ask for, in cells: a whole number such as 4e8 (default "
                         "100 million; also $CRFMAP_MAX_CELLS; there is no 'no limit')")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"crfmap.commands.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"crfmap.commands.{name}":
-                continue  # a command not built yet
-            raise
+    for module_name in commands().values():
+        module = importlib.import_module(module_name)
         cmd = module.add_parser(sub)
         cmd.set_defaults(_run=module.run)
     return parser
@@ -66,7 +74,7 @@ def main(argv=None) -> int:
     from crfmap import environment
 
     try:  # before the sub-commands import numba, which reads NUMBA_NUM_THREADS once and fails on 0
-        environment.check()
+        environment.prepare()
     except CrfmapError as exc:
         return _fail(f"crfmap: error: {exc}")
     parser = build_parser()

@@ -3,15 +3,15 @@
 =====================  ===============================  ===========================================
 variable               read by                          accepted
 =====================  ===============================  ===========================================
-``CRFMAP_ROOT``        :mod:`crfmap.paths`              an existing folder (the checkout; tests use a copy)
-``CRFMAP_OUTPUT_ROOT`` :mod:`crfmap.paths`              a folder, existing or not; writable where written
-``CRFMAP_DATA``        :func:`crfmap.paths.data_root`   a folder (missing files are named when needed)
+``CRFMAP_ROOT``        :mod:`crfstudy.paths`              an existing folder (the checkout; tests use a copy)
+``CRFMAP_OUTPUT_ROOT`` :mod:`crfstudy.paths`              a folder, existing or not; writable where written
+``CRFMAP_DATA``        :func:`crfmap.data.data_root`   a folder (missing files are named when needed)
 ``CRFMAP_MAX_CELLS``   :func:`crfmap.checks.max_cells`  a whole number >= 1 (``4e8`` too); no "no limit"
-``CRFMAP_RUN``         :mod:`crfmap.repro.provenance`   a JSON object (set by :mod:`crfmap.repro.run`)
-``CRFMAP_REPRODUCE_STARTED`` :mod:`crfmap.repro.buildinfo` a Unix time (set by ``make reproduce`` for the paper)
+``CRFMAP_RUN``         :mod:`crfstudy.repro.provenance`   a JSON object (set by :mod:`crfstudy.repro.run`)
+``CRFMAP_REPRODUCE_STARTED`` :mod:`crfstudy.repro.buildinfo` a Unix time (set by ``make reproduce`` for the paper)
 ``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number >= 1 (checked then)
 ``NUMBA_CACHE_DIR``    numba, :mod:`crfmap._numba_cache` a folder numba can write (existing or not)
-``OMP_WAIT_POLICY``    OpenMP (numba's parallel loops)  set to ``PASSIVE`` by ``import crfmap`` unless set
+``OMP_WAIT_POLICY``    OpenMP (numba's parallel loops)  set to ``PASSIVE`` by :func:`prepare` unless set
 =====================  ===============================  ===========================================
 
 ``OMP_WAIT_POLICY=PASSIVE``: OpenMP's threads otherwise spin for a while after each parallel loop,
@@ -21,19 +21,17 @@ a second notebook or process on the machine (measured: LBP on a 2048² grid 17 %
 A folder variable set but empty is refused (an empty path would mean the working directory); an
 empty number variable means unset (the shell idiom ``VAR= command``), as numba reads its own.
 Numba reads ``NUMBA_NUM_THREADS`` once, at its import, and then fails with a traceback (``0``) or
-ignores the value (``abc``): the entry points (the ``crfmap`` command, ``crfmap.repro.reproduce``,
-``crfmap.repro.run``) call :func:`check` before anything imports numba, and ``import crfmap`` installs
-:func:`check_numba_threads_at_numba_import`, so a library user's first kernel (whatever imports numba
-first) raises crfmap's one-line :class:`~crfmap.errors.InputError` naming the variable instead. ``XDG_CACHE_HOME``,
+ignores the value (``abc``): the entry points (the ``crfmap`` command, the study's runners) call
+:func:`prepare` before anything imports numba, and so can a library user (``crfmap.prepare()``), to get
+crfmap's one-line :class:`~crfmap.errors.InputError` naming the variable instead. ``import crfmap`` itself
+changes nothing: no environment variable, no import hook, no file. ``XDG_CACHE_HOME``,
 ``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only hints: a bad value falls back to the default.
 """
 from __future__ import annotations
 
-import importlib.abc
 import math
 import os
 import re
-import sys
 import tempfile
 from pathlib import Path
 
@@ -135,29 +133,9 @@ def numba_threads() -> int | None:
     return value
 
 
-class _NumbaThreadsCheck(importlib.abc.MetaPathFinder):
-    """Checks ``$NUMBA_NUM_THREADS`` when numba is first imported: numba reads it then, once."""
-
-    def find_spec(self, name, path=None, target=None):
-        if name == "numba":
-            numba_threads()  # InputError naming the variable, not numba's traceback (0) or silence (abc)
-            if self in sys.meta_path:
-                sys.meta_path.remove(self)  # checked and good: numba reads it now, never again
-        return None  # the ordinary finders import it
-
-
 def quiet_openmp_threads() -> None:
     """``OMP_WAIT_POLICY=PASSIVE`` unless set: read by OpenMP when numba first starts its threads (see above)."""
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-
-
-def check_numba_threads_at_numba_import() -> None:
-    """Check ``$NUMBA_NUM_THREADS`` at the moment numba is imported (``import crfmap`` calls this).
-
-    Nothing is checked when numba is imported already: it has read the variable (and started).
-    """
-    if "numba" not in sys.modules and not any(isinstance(f, _NumbaThreadsCheck) for f in sys.meta_path):
-        sys.meta_path.insert(0, _NumbaThreadsCheck())
 
 
 def numba_cache_dir() -> Path | None:
@@ -169,7 +147,7 @@ def numba_cache_dir() -> Path | None:
 
 
 def run_context() -> dict | None:
-    """``$CRFMAP_RUN`` (the notebook :mod:`crfmap.repro.run` executes and its parameters), or None if unset.
+    """``$CRFMAP_RUN`` (the notebook :mod:`crfstudy.repro.run` executes and its parameters), or None if unset.
 
     >>> os.environ["CRFMAP_RUN"] = '{"notebook": "04_denoising.ipynb", "parameters": {"noise": 0.3}}'
     >>> run_context()["parameters"]
@@ -215,7 +193,7 @@ def reproduce_started() -> float | None:
 def check() -> None:
     """Check every variable an entry point depends on before it starts (InputError naming the first bad one).
 
-    The same checks as where each is read (:mod:`crfmap.paths`, :func:`crfmap.checks.max_cells`, ...).
+    The same checks as where each is read (:mod:`crfstudy.paths`, :func:`crfmap.checks.max_cells`, ...).
 
     >>> check()
     """
@@ -227,3 +205,18 @@ def check() -> None:
     folder("CRFMAP_ROOT", must_exist=True)
     folder("CRFMAP_OUTPUT_ROOT")
     folder("CRFMAP_DATA")
+
+
+def prepare() -> None:
+    """Ready this process for crfmap's kernels; the entry points call it first, a library user may (optional).
+
+    Checks every variable (:func:`check`) before numba reads ``NUMBA_NUM_THREADS``; where the package's own
+    ``__pycache__`` folders are read-only and ``NUMBA_CACHE_DIR`` is unset, points numba at a user cache folder
+    (:func:`crfmap._numba_cache.configure`); sets ``OMP_WAIT_POLICY=PASSIVE`` unless set (see above). Importing
+    crfmap does none of this.
+    """
+    check()
+    from crfmap._numba_cache import configure
+
+    configure()
+    quiet_openmp_threads()

@@ -1,7 +1,7 @@
 """Lazy public APIs for the subpackages: a name is imported from its submodule on first use.
 
 Each subpackage's ``__init__`` holds ``_API = {"name": "submodule", ...}`` (the list of what it offers, also
-read by :mod:`crfmap.repro.dependencies`) and ends with
+read by :mod:`crfstudy.repro.dependencies`) and ends with
 ``__getattr__, __dir__, __all__ = attach(__name__, _API)``, as scikit-image's lazy_loader does, so that
 ``import crfmap.io`` stays cheap and ``from crfmap.io import read_bag`` still works.
 """

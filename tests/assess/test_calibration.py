@@ -56,7 +56,7 @@ def test_split_calibration_and_errors():
 
 def test_split_temperature_recovers_a_known_temperature_of_the_preset():
     from crfmap.assess.calibration import fit_split_temperature, tempered_preset
-    from crfmap.crf.model.presets import get_preset
+    from crfmap.crf.presets import get_preset
 
     rng = np.random.default_rng(4)
     shape = (160, 160)

@@ -1,4 +1,6 @@
-"""A reader follows ``infer`` to the numba kernel that updates a message in at most MAX_HOPS Python calls.
+"""A reader follows ``infer`` to the numba kernel that updates a message in at most MAX_HOPS Python calls
+(PLAIN_HOPS for the plain schedules: ``infer -> run_schedule -> the schedule's iteration -> kernel``, the iteration
+being the schedule's entry in the registry ``crfmap.crf.inference.schedules.PLAIN_RUNNERS``).
 
 Every numba dispatcher that Python code of ``crfmap.crf`` calls is wrapped (in the namespace it
 is looked up in) by a counter of the Python frames between the ``infer`` call and it. A hop is
@@ -23,6 +25,7 @@ from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.schedules import Checkerboard, Flooding, Sweep, Thesis
 
 MAX_HOPS = 3
+PLAIN_HOPS = 4
 THREADS_SOURCE = crfmap.crf.threads.__file__
 MESSAGE_UPDATES = {"_pass", "_send_rows",
                    "_sweep_along_rows", "_sweep_along_columns", "_pull_iteration"}  # the kernels that update messages
@@ -81,9 +84,10 @@ HARD[3, 4] = 1.0  # hard evidence: the fused start falls back to the general pat
     lambda: infer(SMALL, max_iter=5, schedule=Sweep()),
     lambda: infer(SMALL, max_iter=2, schedule=Thesis(start="upper-left"), region=SMALL > 0.3),
 ], ids=["fused", "hard-evidence", "parallel", "region", "warm", "coarse", "plain", "flooding", "sweep", "thesis"])
-def test_infer_reaches_the_message_update_in_at_most_three_hops(monkeypatch, call):
+def test_infer_reaches_the_message_update_in_at_most_three_hops(monkeypatch, call, request):
     hops = _count_hops(monkeypatch)
     call()
     updates = {name: n for name, n in hops.items() if name in MESSAGE_UPDATES}
     assert updates, f"no message-update kernel was reached: {hops}"
-    assert max(updates.values()) <= MAX_HOPS, f"Python hops from infer to each kernel: {hops}"
+    plain = request.node.callspec.id in ("plain", "flooding", "sweep", "thesis")
+    assert max(updates.values()) <= (PLAIN_HOPS if plain else MAX_HOPS), f"Python hops from infer to each kernel: {hops}"

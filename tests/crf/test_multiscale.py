@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from crfmap.bench.common import bench_grid
+from crfstudy.bench.common import bench_grid
 from crfmap.crf.inference.schedules import Checkerboard
 from crfmap.crf.inference import multiscale
 from crfmap.crf.inference.lbp import infer
-from crfmap.crf.model.presets import coupling_table
+from crfmap.crf.presets import coupling_table
 from crfmap.errors import InputError
 
 RNG = np.random.default_rng(7)

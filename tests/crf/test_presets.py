@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from crfmap.crf.inference.lbp import infer
-from crfmap.crf.model.presets import CRITICAL_COUPLING, evidence_from_probability, get_preset, PRESETS
+from crfmap.crf.presets import CRITICAL_COUPLING, evidence_from_probability, get_preset, PRESETS
 from crfmap.errors import InputError
 
 
@@ -67,7 +67,7 @@ def test_unknown_preset_is_named():
 def test_refine_within_bounds_the_senders_and_keeps_the_preset_region():
     """``within`` limits the cells that send messages (as infer's region); outside the preset's own region the
     beliefs stay the observation."""
-    from crfmap.crf.model.presets import DEFAULT_PRESET, custom_preset
+    from crfmap.crf.presets import DEFAULT_PRESET, custom_preset
     from crfmap.grid import OccupancyGrid
 
     rng = np.random.default_rng(1)
@@ -92,7 +92,7 @@ def test_refine_within_bounds_the_senders_and_keeps_the_preset_region():
 def test_temperature_tempers_the_whole_refined_map_and_one_changes_nothing():
     from dataclasses import replace
 
-    from crfmap.crf.model.presets import temper
+    from crfmap.crf.presets import temper
 
     c = get_preset("certainty")
     assert c.temperature == 1.0 and get_preset("thesis").temperature == 1.0

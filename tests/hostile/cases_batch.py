@@ -1,6 +1,6 @@
 """The catalogue, continued: the batch side -- sweep files (``make sweep``) and environment variables.
 
-A sweep case runs ``python -m crfmap.repro.reproduce --sweep FILE --dry-run`` (what ``make sweep``
+A sweep case runs ``python -m crfstudy.repro.reproduce --sweep FILE --dry-run`` (what ``make sweep``
 runs; a dry run, so a sweep wrongly accepted does not start notebooks) with the outputs in the case's
 folder. An environment case runs a command line with one variable set; numba reads
 ``NUMBA_NUM_THREADS`` only when it is imported, so those cases run in a child process.
@@ -195,7 +195,7 @@ _env_case("CRFMAP_RUN-path-escape", {"CRFMAP_RUN": '{{"notebook": "../../etc/pas
 
 
 def _save_numbers(name, numbers):
-    from crfmap.repro.report import save_numbers
+    from crfstudy.repro.report import save_numbers
 
     return save_numbers(name, numbers)
 

@@ -57,8 +57,8 @@ def _hung(signum, frame):
     raise TimeoutError(f"no answer within {HANG_LIMIT:g} s (blocked)")
 
 
-ENTRIES = {"crfmap": "crfmap.cli", "reproduce": "crfmap.repro.reproduce", "run": "crfmap.repro.run",
-           "warmup": "crfmap.repro.warmup", "library": "library_use"}  # a case's command line: its module
+ENTRIES = {"crfmap": "crfmap.cli", "reproduce": "crfstudy.repro.reproduce", "run": "crfstudy.repro.run",
+           "warmup": "crfstudy.repro.warmup", "library": "library_use"}  # a case's command line: its module
 
 
 @contextlib.contextmanager

@@ -6,7 +6,7 @@ import pytest
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import Stores, get_typestore
 
-from crfmap import paths
+from crfmap.data import data_file, have_data
 from crfmap.io.bag_reader import read_bag
 from crfmap.io.bag_writer import write_bag
 from crfmap.cli import main
@@ -256,9 +256,9 @@ def test_missing_requested_pose_source_and_bad_arguments(tmp_path):
 
 
 # --- real bags -----------------------------------------------------------------------------------
-@pytest.mark.skipif(not paths.have_data(ROS2_BAG), reason="ROS2 bag not downloaded")
+@pytest.mark.skipif(not have_data(ROS2_BAG), reason="ROS2 bag not downloaded")
 def test_real_ros2_bag():
-    rec = read_bag(paths.data_file(ROS2_BAG))
+    rec = read_bag(data_file(ROS2_BAG))
     assert rec.meta["scans_total"] == 357 and rec.meta["scans_dropped"] == 1  # the first scan predates /tf
     assert rec.scans.ranges.shape == (356, 720)
     assert rec.scans.laser_frame_id == "rplidar_link" and rec.scans.frame_id == "odom"
@@ -267,14 +267,14 @@ def test_real_ros2_bag():
     assert len(rec.odometry) == 920 and len(rec.cmd_vel) == 192
     assert not np.isfinite(rec.scans.ranges).all()  # kept as recorded, REP 117 values included
     # /odom and /tf agree on this robot.
-    odom = read_bag(paths.data_file(ROS2_BAG), pose_source="odom")
+    odom = read_bag(data_file(ROS2_BAG), pose_source="odom")
     common = np.isin(rec.scans.stamps, odom.scans.stamps)
     np.testing.assert_allclose(rec.scans.laser_poses[common, :2], odom.scans.laser_poses[:, :2], atol=0.02)
 
 
-@pytest.mark.skipif(not paths.have_data(ROS1_BAG), reason="ROS1 bag not downloaded")
+@pytest.mark.skipif(not have_data(ROS1_BAG), reason="ROS1 bag not downloaded")
 def test_real_ros1_bag():
-    rec = read_bag(paths.data_file(ROS1_BAG))
+    rec = read_bag(data_file(ROS1_BAG))
     assert rec.meta["format"] == "ros1" and rec.meta["scans_total"] == 962
     assert rec.scans.ranges.shape[1] == 726 and len(rec.scans) >= 950
     assert len(rec.odometry) == 977 and len(rec.cmd_vel) == 110

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from crfmap import paths
+from crfmap.data import data_file, have_data
 from crfmap.mapping.builder import count_hits
 from crfmap.io.carmen import read_carmen
 from crfmap.errors import InputError
@@ -127,13 +127,13 @@ def test_missing_file_and_folder(tmp_path):
         read_carmen(tmp_path)
 
 
-@pytest.mark.skipif(not (paths.have_data(INTEL) and paths.have_data(ACES)), reason="CARMEN logs not downloaded")
+@pytest.mark.skipif(not (have_data(INTEL) and have_data(ACES)), reason="CARMEN logs not downloaded")
 @pytest.mark.parametrize("name, n_scans, code, first_pose", [
     (INTEL, 910, 80.0, (0.600266, -0.0320327, -0.354665)),  # 81.83 m readings: beyond a SICK's 80 m
     (ACES, 440, 50.0, (0.89706, -0.180771, -0.454003)),
 ])
 def test_real_logs(name, n_scans, code, first_pose):
-    rec = read_carmen(paths.data_file(name))
+    rec = read_carmen(data_file(name))
     s = rec.scans
     assert s.ranges.shape == (n_scans, 180)
     assert rec.meta["no_return_code"] == code and s.range_max == code
@@ -149,11 +149,11 @@ def _wall_agreement(scans):
     return occ[occ > emp].sum() / occ.sum()
 
 
-@pytest.mark.skipif(not paths.have_data(INTEL), reason="Intel log not downloaded")
+@pytest.mark.skipif(not have_data(INTEL), reason="Intel log not downloaded")
 def test_intel_beam_order_is_right():
     # The data README: reversing the beam order turns the Intel map into noise. Our order
     # must give scans that agree with each other far better than the reversed one.
-    s = read_carmen(paths.data_file(INTEL)).scans
+    s = read_carmen(data_file(INTEL)).scans
     right = _wall_agreement(s)
     s.ranges = np.ascontiguousarray(s.ranges[:, ::-1])
     assert right > 2 * _wall_agreement(s)
@@ -197,10 +197,10 @@ def test_clean_odometry_keeps_a_clean_log_silent(log_file):
     assert rec.meta["odometry_dropped"] == 0 and rec.meta["odometry_jumps"] == 0
 
 
-@pytest.mark.skipif(not paths.have_data(INTEL), reason="the Intel log is not downloaded")
+@pytest.mark.skipif(not have_data(INTEL), reason="the Intel log is not downloaded")
 def test_intel_odometry_has_no_zero_or_backward_stamps():
     with pytest.warns(UserWarning, match="dropped") as caught:
-        rec = read_carmen(paths.data_file(INTEL))
+        rec = read_carmen(data_file(INTEL))
     stamps = rec.odometry.stamps
     assert np.all(np.round(stamps * 1e9) > 0) and np.all(np.diff(stamps) > 0)
     assert len(stamps) + rec.meta["odometry_dropped"] == 14541 and rec.meta["odometry_dropped"] > 867

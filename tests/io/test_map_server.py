@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import crfmap.paths
+import crfmap.data
 from crfmap.io import map_server as mapio
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
@@ -15,7 +15,7 @@ from crfmap.io.grid_files import load_grid, save_grid
 from crfmap.io.map_server import load_map, save_map
 
 OLIN = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"
-have_olin = pytest.mark.skipif(not crfmap.paths.have_data(OLIN), reason=f"public data {OLIN} not present")
+have_olin = pytest.mark.skipif(not crfmap.data.have_data(OLIN), reason=f"public data {OLIN} not present")
 
 
 def write_pgm(path, pixels):
@@ -265,7 +265,7 @@ def test_exact_round_trip_of_odd_metadata(tmp_path):
 # --- the real Olin College map (written by nav2's map_saver) ----------------------------------
 @have_olin
 def test_olin_map_loads_like_map_server():
-    path = crfmap.paths.data_file(OLIN)
+    path = crfmap.data.data_file(OLIN)
     data = path.with_suffix(".pgm").read_bytes()
     header = data[:16].split()
     assert header[0] == b"P5" and header[3] == b"255"
@@ -287,7 +287,7 @@ def test_olin_map_loads_like_map_server():
 
 @have_olin
 def test_olin_map_writes_back(tmp_path):
-    path = crfmap.paths.data_file(OLIN)
+    path = crfmap.data.data_file(OLIN)
     grid = load_map(path)
     save_map(grid, tmp_path / path.name)
     again = load_map(tmp_path / path.name)

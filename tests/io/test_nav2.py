@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import crfmap.paths
+import crfmap.data
 from crfmap.grid import OccupancyGrid
 from crfmap.io.map_server import load_map, save_map
 from crfmap.io.nav2_costmap import nav2_counts, static_layer_costs
@@ -260,9 +260,9 @@ def test_infer_and_build_print_what_nav2_will_see(tmp_path, capsys):
                  "--save-free-thresh", "0.1"]) == 2
 
 
-@pytest.mark.skipif(not crfmap.paths.have_data(OLIN), reason=f"public data {OLIN} not present")
+@pytest.mark.skipif(not crfmap.data.have_data(OLIN), reason=f"public data {OLIN} not present")
 def test_olin_map_reads_the_same_under_both_loaders():
-    humble = load_map(crfmap.paths.data_file(OLIN), loader="humble").to_int8()
-    jazzy = load_map(crfmap.paths.data_file(OLIN), loader="jazzy").to_int8()
+    humble = load_map(crfmap.data.data_file(OLIN), loader="humble").to_int8()
+    jazzy = load_map(crfmap.data.data_file(OLIN), loader="jazzy").to_int8()
     np.testing.assert_array_equal(humble, jazzy)  # 8-bit grey 0 / 205 / 254: no rule differs there
     assert nav2_counts(jazzy)["occupied"] == (jazzy == 100).sum() > 1000

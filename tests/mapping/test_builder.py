@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import naive_builder as naive
-from crfmap import paths
+from crfmap.data import data_file, have_data
 from crfmap.io.carmen import read_carmen
 from crfmap.mapping.builder import (HitCounter, arctan_probability, build_grid, count_hits, logodds_to_probability,
                             scan_bounds)
@@ -242,9 +242,9 @@ def hits_on_walls(occupied, empty):
 
 
 @pytest.mark.parametrize("name", [INTEL, ACES])
-@pytest.mark.skipif(not (paths.have_data(INTEL) and paths.have_data(ACES)), reason="CARMEN logs not downloaded")
+@pytest.mark.skipif(not (have_data(INTEL) and have_data(ACES)), reason="CARMEN logs not downloaded")
 def test_carmen_maps_have_crisp_walls(name):
-    rec = read_carmen(paths.data_file(name))
+    rec = read_carmen(data_file(name))
     for model in ("arctan", "logodds"):
         grid = build_grid(rec.scans, 0.05, model=model)
         share, connected = wall_statistics(grid)
@@ -254,11 +254,11 @@ def test_carmen_maps_have_crisp_walls(name):
     assert hits_on_walls(occ, emp) > 0.3  # Intel 0.5, ACES 0.4; a wrong mount gives ~0.1
 
 
-@pytest.mark.skipif(not paths.have_data(ROS2_BAG), reason="ROS2 bag not downloaded")
+@pytest.mark.skipif(not have_data(ROS2_BAG), reason="ROS2 bag not downloaded")
 def test_ros2_bag_map_needs_the_laser_mount():
     from crfmap.io.bag_reader import read_bag
 
-    bag = paths.data_file(ROS2_BAG)
+    bag = data_file(ROS2_BAG)
     with_mount = read_bag(bag)
     without = read_bag(bag, laser_mount=(0.0, 0.0, 0.0))
     crisp = hits_on_walls(*count_hits(with_mount.scans, 0.05))

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from crfmap.mapping import builder; from crfmap import paths
+from crfmap.data import data_file, have_data
+from crfmap.mapping import builder
 from crfmap.errors import InputError
 from crfmap.crf.inference.lbp import infer
 from crfmap.mapping.online import OnlineMapper
@@ -162,13 +163,13 @@ def test_margin_final_map_equals_offline_bounded_lbp():
     np.testing.assert_allclose(final.beliefs.probability, offline.beliefs.probability, atol=1e-6)
 
 
-@pytest.mark.skipif(not paths.have_data("carmen/intel-corrected.log.gz"), reason="Intel lab log not present")
+@pytest.mark.skipif(not have_data("carmen/intel-corrected.log.gz"), reason="Intel lab log not present")
 def test_intel_log_first_scans_match_the_builder():
     from dataclasses import replace
 
     from crfmap.io.carmen import read_carmen
 
-    scans = read_carmen(paths.data_file("carmen/intel-corrected.log.gz")).scans
+    scans = read_carmen(data_file("carmen/intel-corrected.log.gz")).scans
     scans = replace(scans, ranges=scans.ranges[:60], laser_poses=scans.laser_poses[:60], stamps=scans.stamps[:60])
     mapper = OnlineMapper.for_scans(scans, 0.05)
     seconds = mapper.run(scans)

@@ -6,7 +6,7 @@ import signal
 import numpy as np
 import pytest
 
-from crfmap import paths
+from crfmap.data import data_file, have_data
 from crfmap.cli import main as crfmap_main
 from crfmap.io.grid_files import load_grid
 from crfmap.io.npy_grid import save_npy
@@ -25,7 +25,7 @@ def _intel_grid():
     from crfmap.io.carmen import read_carmen
     from crfmap.mapping import build_grid
 
-    return build_grid(read_carmen(paths.data_file(INTEL)).scans, 0.1)
+    return build_grid(read_carmen(data_file(INTEL)).scans, 0.1)
 
 
 def _expected(source, tmp_path, name):
@@ -58,7 +58,7 @@ def _send(writer, msg):
     writer.write(native_message("grid", msg))
 
 
-@pytest.mark.skipif(not (paths.have_data(OLIN) and paths.have_data(INTEL)), reason="needs the shared data (CRFMAP_DATA)")
+@pytest.mark.skipif(not (have_data(OLIN) and have_data(INTEL)), reason="needs the shared data (CRFMAP_DATA)")
 def test_refine_node_over_dds(tmp_path, monkeypatch):
     from cyclonedds.domain import DomainParticipant
     from cyclonedds.sub import DataReader
@@ -68,12 +68,12 @@ def test_refine_node_over_dds(tmp_path, monkeypatch):
     from crfmap.ros.dds import dds_qos
 
     env = loopback_dds(tmp_path, monkeypatch)
-    olin_file = load_grid(paths.data_file(OLIN))
+    olin_file = load_grid(data_file(OLIN))
     olin = grid_out(olin_file, 1_700_000_000_123_456_789, "map")
     # the map the node receives is the file's grid itself (trinary: 0, 100, -1 carry P exactly)
     assert np.array_equal(occupancy_grid(olin).probability, olin_file.probability)
     intel = grid_out(_intel_grid(), 1_700_000_100_000_000_001, "map")
-    expected = {"olin": _expected(str(paths.data_file(OLIN)), tmp_path, "olin"),
+    expected = {"olin": _expected(str(data_file(OLIN)), tmp_path, "olin"),
                 "intel": _expected(occupancy_grid(intel), tmp_path, "intel")}
 
     node = NodeProcess(["refine", "--period", "0"], env)
@@ -223,7 +223,7 @@ def _final_map(maps, scan_log, last_stamp):
     return payload
 
 
-@pytest.mark.skipif(not paths.have_data(OLIN_BAG), reason="needs the shared data (CRFMAP_DATA)")
+@pytest.mark.skipif(not have_data(OLIN_BAG), reason="needs the shared data (CRFMAP_DATA)")
 def test_map_node_over_dds_equals_online_mapper_on_the_scans_it_integrated(tmp_path, monkeypatch):
     """The bag played at 10x: the node's final /map equals OnlineMapper fed exactly the scans the node integrated.
 
@@ -248,7 +248,7 @@ def test_map_node_over_dds_equals_online_mapper_on_the_scans_it_integrated(tmp_p
     from crfmap.ros.tf_buffer import stamp_seconds
 
     env = loopback_dds(tmp_path, monkeypatch)
-    bag = paths.data_file(OLIN_BAG)
+    bag = data_file(OLIN_BAG)
     scans = read_bag(bag).scans
     bounds = scan_bounds(scans)
     scan_log = tmp_path / "integrated.txt"

@@ -15,8 +15,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from crfmap import paths
-
+from crfmap.data import data_file, have_data
 from ros_support import TIMEOUT, NodeProcess  # noqa: E402
 
 INTEL = "carmen/intel-corrected.log.gz"
@@ -61,7 +60,7 @@ LISTENER = textwrap.dedent("""
 
 
 @pytest.mark.skipif(_ros1_missing() is not None, reason=str(_ros1_missing()))
-@pytest.mark.skipif(not paths.have_data(INTEL), reason="needs the shared data (CRFMAP_DATA)")
+@pytest.mark.skipif(not have_data(INTEL), reason="needs the shared data (CRFMAP_DATA)")
 def test_map_node_through_roscore(tmp_path):
     from crfmap.io.bag_reader import read_bag
     from crfmap.io.bag_writer import write_bag
@@ -69,7 +68,7 @@ def test_map_node_through_roscore(tmp_path):
     from crfmap.mapping import OnlineMapper
     from crfmap.mapping.builder import scan_bounds
 
-    recording = read_carmen(paths.data_file(INTEL))
+    recording = read_carmen(data_file(INTEL))
     recording = replace(recording, scans=recording.scans.head(30), odometry=None, cmd_vel=None, true_poses=None)
     bag = write_bag(recording, tmp_path / "intel30.bag", fmt="ros1")
     scans = read_bag(bag).scans

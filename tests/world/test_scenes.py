@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from crfmap import paths
+from crfmap.data import data_file, have_data
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.world.scenes import SCENES, enclosed_boxes, make_scene, noisy_image, occluded_walls, x_image
@@ -31,9 +31,9 @@ def test_thesis_scene_sizes():
     assert occluded_walls("train", resolution=1.0).truth.resolution == 1.0
 
 
-@pytest.mark.skipif(not paths.have_data("images/ugm_X_32x32.csv"), reason="UGM X image not downloaded")
+@pytest.mark.skipif(not have_data("images/ugm_X_32x32.csv"), reason="UGM X image not downloaded")
 def test_x_image_polarity_and_orientation():
-    csv = np.loadtxt(paths.data_file("images/ugm_X_32x32.csv"), delimiter=",")
+    csv = np.loadtxt(data_file("images/ugm_X_32x32.csv"), delimiter=",")
     truth = x_image().truth.probability
     assert truth.sum() == np.count_nonzero(csv == 0)  # the stroke (CSV 0) is occupied
     assert np.array_equal(truth, np.flipud(1 - csv))  # CSV row 0 is the image top = highest y

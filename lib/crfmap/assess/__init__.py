@@ -6,12 +6,8 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 - :mod:`crfmap.assess.crossval`: ``cross_validate``, ``CrossValidation``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean``
 - :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score``, ``compare`` (validation on scans the map never saw)
 - :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
-- :mod:`crfmap.assess.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``scaled_scores``, ``fit_pseudolikelihood``
-- :mod:`crfmap.assess.preset_search`: ``coordinate_search`` (the search that chose the certainty preset, on Intel)
-- :mod:`crfmap.assess.ablations`: ``ablation_presets``, ``IsotonicEvidence``, ``PlattRaw`` (what coupling adds beyond recalibration)
 - :mod:`crfmap.assess.splits`: ``split_by``, ``harder_splits``, ``block_sensitivity`` (temporal and spatial scan splits)
 - :mod:`crfmap.assess.paired`: ``paired_difference``, ``sign_test`` (methods on the same seeds, rooms or folds)
-- :mod:`crfmap.assess.samecells`: ``fold_scores``, ``block_scores`` (every method on the cells all of them decide)
 - :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
@@ -46,20 +42,10 @@ _API = {
     "window_median": "baselines",
     "grey_closing": "baselines",
     "graph_cut": "baselines",
-    "symmetric_tables": "modelspace",
-    "fit_scaled": "modelspace",
-    "scaled_scores": "modelspace",
-    "fit_pseudolikelihood": "modelspace",
-    "coordinate_search": "preset_search",
-    "ablation_presets": "ablations",
-    "IsotonicEvidence": "ablations",
-    "PlattRaw": "ablations",
     "split_by": "splits",
     "harder_splits": "splits",
     "block_sensitivity": "splits",
     "paired_difference": "paired",
     "sign_test": "paired",
-    "fold_scores": "samecells",
-    "block_scores": "samecells",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)

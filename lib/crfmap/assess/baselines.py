@@ -97,7 +97,7 @@ def all_baselines(split, thesis_max_iter: int = 1000, names=BASELINES) -> dict:
     ``median3x3``, ``closing3x3``, ``thesis`` (LBP with the thesis's tables on the raw grid) and
     ``graphcut`` (the MAP labelling of the thesis's CRF).
     """
-    from crfmap.crf.model.presets import get_preset
+    from crfmap.crf.presets import get_preset
 
     unknown = [n for n in names if n not in BASELINES]
     if unknown:

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from crfmap.crf.model.presets import LOGIT_FLOOR, temper
+from crfmap.crf.presets import LOGIT_FLOOR, temper
 from crfmap.errors import InputError
 
 DEFAULT_BINS = 10
@@ -61,7 +61,7 @@ def expected_calibration_error(p, labels, bins: int = DEFAULT_BINS) -> float:
 
 
 def apply_temperature(p, temperature: float) -> np.ndarray:
-    """``sigmoid(logit(P) / T)`` (:func:`crfmap.crf.model.presets.temper`, what a preset's ``temperature`` does).
+    """``sigmoid(logit(P) / T)`` (:func:`crfmap.crf.presets.temper`, what a preset's ``temperature`` does).
 
     P = 0.5 stays 0.5, and T = 1 changes nothing but clipping at 0 and 1.
 
@@ -111,15 +111,15 @@ def fit_split_temperature(split, prediction, group: str = "all") -> float:
 
 
 def tempered_preset(preset, temperature: float):
-    """``preset`` (a :class:`~crfmap.crf.model.presets.Preset` or its name) with ``temperature`` T.
+    """``preset`` (a :class:`~crfmap.crf.presets.Preset` or its name) with ``temperature`` T.
 
-    >>> from crfmap.crf.model.presets import DEFAULT_PRESET
+    >>> from crfmap.crf.presets import DEFAULT_PRESET
     >>> tempered_preset(DEFAULT_PRESET, 0.9).temperature
     0.9
     """
     from dataclasses import replace
 
-    from crfmap.crf.model.presets import get_preset
+    from crfmap.crf.presets import get_preset
 
     base = get_preset(preset) if isinstance(preset, str) else preset
     return replace(base, temperature=temperature)

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.assess.block_bootstrap import _auc_resampled, _block_counts, _block_ids, _draws
-from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
@@ -337,7 +337,7 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     predictions = all_baselines(split, names=[m for m in wanted if m in BASELINES])
     out_lbp = None
     if preset in wanted:
-        result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes, max_iter=5000)
+        result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes)  # as users run it
         predictions[preset] = result.beliefs.probability
         out_lbp = {"converged": result.converged, "iterations": result.iterations, "last_change": result.last_change}
     peers, seconds = peer_rows(split, [m for m in wanted if m in PEERS])

@@ -22,7 +22,7 @@ def add_parser(sub):
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
     p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
-                   help="the preset to score (default: crfmap.crf.model.presets.DEFAULT_PRESET, certainty)")
+                   help="the preset to score (default: crfmap.crf.presets.DEFAULT_PRESET, certainty)")
     p.add_argument("--methods", default="all", help="comma-separated rows to score (default all: raw, logodds, "
                    "mean3x3, median3x3, closing3x3, thesis, graphcut, the preset, octomap, hilbert); raw is always "
                    "scored")
@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from crfmap.assess.calibration import split_calibration
     from crfmap.assess.scansplit import compare, scan_split, table_rows
     from crfmap.commands.build import load_recording
-    from crfmap.repro.report import markdown_table
+    from tabulate import tabulate
 
     if args.boot < 0:
         raise InputError("--boot", f"must be non-negative, got {args.boot}")
@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--block", f"must be a positive number of cells, got {args.block}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be positive, got {args.resolution}")
-    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
 
     args.preset = DEFAULT_PRESET if args.preset is None else args.preset
     try:
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"{args.input}: {split.shape[1]}x{split.shape[0]} cells, {args.group} cells the second half observed "
           f"({scores['raw'][args.group]['cells']}){state}")
     rows = [row + [scores["_ece"][row[0]]] for row in table_rows(scores, args.group)]
-    print(markdown_table(header, rows), end="")
+    print(tabulate(rows, header, tablefmt="github", floatfmt=".4f"))
     if "_seconds" in scores:
         print("peer wall time: " + ", ".join(f"{n} {s:.1f} s" for n, s in scores["_seconds"].items()))
     return 0

@@ -3,8 +3,10 @@ from __future__ import annotations
 
 import argparse
 
-from crfmap.errors import InputError
 from crfmap.commands.build import add_map_output_options, save_map_output
+from crfmap.crf.inference.schedules import SETTINGS
+from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
+from crfmap.errors import InputError
 
 
 def add_parser(sub):
@@ -16,28 +18,27 @@ def add_parser(sub):
     )
     p.add_argument("input", help="map_server YAML or .npy grid of P(occupied)")
     p.add_argument("output", help="map_server YAML (trinary by default, see --mode) or .npy (exact P)")
-    p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
-                   help="the CRF's configuration (crfmap.crf.model.presets; default: DEFAULT_PRESET, certainty). "
-                   "certainty: recommended for real maps; each cell's link strength follows its "
-                   "evidence (a map file's P read back as net hits), coupling below critical, LBP only within 5 "
-                   "cells of an observation (better scan-split scores on every real recording; see crfmap "
-                   "evaluate). thesis: the thesis's tables [[10,1],[1,10]] and identity link over the whole "
-                   "grid, for the reproduction (ordered phase: erases thin walls, fills unseen space)")
+    p.add_argument("--preset", default=None, choices=list(PRESETS), metavar="{" + ",".join(PRESETS) + "}",
+                   help=f"the CRF's configuration, model and solver (crfmap.crf.presets; default {DEFAULT_PRESET}). "
+                   + "; ".join(f"{p.name}: {p.purpose}" for p in PRESETS.values()))
     p.add_argument("--hidden", default=None, help="hidden pairwise table oo,oe,eo,ee: giving --hidden or --link "
                    "makes a custom preset of these tables instead of --preset (default 10,1,1,10, the thesis's)")
     p.add_argument("--link", default=None, help="link table oo,oe,eo,ee of a custom preset (default 1,0,0,1)")
-    p.add_argument("--schedule", default="checkerboard", choices=["checkerboard", "flooding", "sweep", "thesis"])
-    p.add_argument("--max-iter", type=int, default=1000, help="iteration limit (the thesis used 2)")
-    p.add_argument("--tol", type=float, default=1e-5, help="stop when the largest message change is below this")
+    p.add_argument("--schedule", default=None, choices=list(SETTINGS),
+                   help="message schedule (crfmap.crf.inference.schedules; default: the preset's)")
+    p.add_argument("--max-iter", type=int, default=None,
+                   help="iteration limit (default: the preset's; the thesis used 2)")
+    p.add_argument("--tol", type=float, default=None,
+                   help="stop when the largest message change is below this (default: the preset's)")
     p.add_argument("--damping", type=float, default=0.0, help="weight of the old message, in [0, 1)")
     p.add_argument("--pairing", default=None, choices=["receiver", "oriented"],
                    help="custom --hidden tables only: how a non-symmetric hidden table applies to an edge "
                    "(default receiver; see crfmap.crf.model.potentials)")
     p.add_argument("--float32", action="store_true", help="compute in float32 (faster, less memory)")
     p.add_argument("--margin", type=int, default=None, metavar="CELLS",
-                   help="infer only cells within CELLS of an observed cell; the rest stay unknown "
-                   "(default: the preset's, 5 for certainty, the whole grid for thesis and custom tables; see "
-                   "crfmap.crf.inference.regions.near_known)")
+                   help="infer only cells within CELLS of an observed cell; the rest stay unknown (default: the "
+                   "preset's: " + ", ".join(f"{p.name} {'the whole grid' if p.margin is None else p.margin}"
+                                            for p in PRESETS.values()) + "; custom tables the whole grid)")
     p.add_argument("--free-thresh", type=float, default=None,
                    help="override a YAML input's free_thresh when loading (Humble's map_saver writes 0.25, "
                    "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
@@ -58,7 +59,8 @@ def _check_options(args, hidden, link):
 
     if not str(args.output).lower().endswith((".yaml", ".yml")) and args.mode is not None:
         raise InputError("--mode", f"applies to map_server YAML outputs only, not to {args.output}")
-    check_number("--tol", args.tol, low=0.0)
+    if args.tol is not None:
+        check_number("--tol", args.tol, low=0.0)
     check_number("--damping", args.damping, low=0.0, high=1.0)
     if args.damping == 1.0:
         raise InputError("--damping", "must be below 1 (1 would never update a message)")
@@ -85,7 +87,7 @@ def _preset(args):
     from dataclasses import replace
 
     from crfmap.crf.model.potentials import check_table
-    from crfmap.crf.model.presets import DEFAULT_PRESET, custom_preset, get_preset
+    from crfmap.crf.presets import custom_preset, get_preset
 
     if args.hidden is not None or args.link is not None:
         if args.preset is not None:
@@ -108,17 +110,19 @@ def _preset(args):
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from crfmap.crf.inference.schedules import SETTINGS
     from crfmap.io.grid_files import load_grid
 
-    if args.max_iter < 0:
+    if args.max_iter is not None and args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
     preset = _preset(args)
-    schedule = SETTINGS[args.schedule](damping=args.damping)
+    solver = preset.solver()  # the preset's solver, each option the user gave replacing its setting
+    schedule = SETTINGS[args.schedule or solver["schedule"]](damping=args.damping)
     grid = load_grid(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh,
                      loader=args.loader)
-    result = preset.refine(grid, schedule=schedule, max_iter=args.max_iter, tol=args.tol,
-                           dtype=np.float32 if args.float32 else np.float64)
+    result = preset.refine(grid, schedule=schedule,
+                           max_iter=solver["max_iter"] if args.max_iter is None else args.max_iter,
+                           tol=solver["tol"] if args.tol is None else args.tol,
+                           dtype=np.float32 if args.float32 else np.dtype(solver["dtype"]).type)
     nav2_view = save_map_output(result.beliefs, args.output, args)
     print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, "
           f"{result.seconds:.3f} s -> {args.output}: {nav2_view}")

@@ -1,8 +1,7 @@
 """The CRF and its inference, in three layers a reader can take one at a time.
 
 - :mod:`crfmap.crf.model`: what the CRF is. ``potentials`` (the two 2x2 tables and how they are
-  checked), ``presets`` (named configurations: the one source of settings for ``crfmap infer``,
-  ``crfmap evaluate`` and the notebooks), ``evidence`` (cells made certain by hard evidence).
+  checked), ``evidence`` (cells made certain by hard evidence).
 - :mod:`crfmap.crf.inference`: how it is solved. ``lbp.infer`` (checks its input, picks a kernel,
   returns an ``LBPResult`` from ``result``), ``schedules`` (each schedule with the settings
   that apply to it, and the plain kernels that run them), ``regions`` (bounded LBP's masks),
@@ -12,6 +11,9 @@
   ``EngineResult``), ``packed`` (red/black odds planes and the passes over them),
   ``_message_update`` (the numba message update), ``_layout`` (packing kernels),
   ``incremental`` (the public API the online mapper drives), ``messages`` and ``workspace``.
+- :mod:`crfmap.crf.presets`: named configurations, model and solver together (the one source of settings for
+  ``crfmap infer``, ``crfmap evaluate``, the node, the online mapper and the notebooks); above the three layers,
+  since a preset runs inference.
 - :mod:`crfmap.crf.threads`: row bands of ``nogil`` kernels on Python threads (cheaper to compile
   than numba's parallel loops), used by all three layers.
 
@@ -32,11 +34,11 @@ _API = {
     "check_pairing": "model.potentials",
     "directional_tables": "model.potentials",
     "link_unary": "model.potentials",
-    "DEFAULT_PRESET": "model.presets",
-    "PRESETS": "model.presets",
-    "Preset": "model.presets",
-    "get_preset": "model.presets",
-    "custom_preset": "model.presets",
+    "DEFAULT_PRESET": "presets",
+    "PRESETS": "presets",
+    "Preset": "presets",
+    "get_preset": "presets",
+    "custom_preset": "presets",
     "infer": "inference.lbp",
     "message": "inference.lbp",
     "LBPResult": "inference.result",

@@ -29,7 +29,6 @@ import time
 from collections import deque
 from dataclasses import dataclass
 
-import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.ros import qos
@@ -49,11 +48,9 @@ def refine_grid(grid):
     >>> refine_grid(g).shape
     (1, 4)
     """
-    from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset
+    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
 
-    # crfmap infer's defaults (its options --schedule checkerboard, --max-iter 1000, --tol 1e-5, float64)
-    return get_preset(DEFAULT_PRESET).refine(grid, schedule="checkerboard", max_iter=1000, tol=1e-5,
-                                             dtype=np.float64).beliefs
+    return get_preset(DEFAULT_PRESET).refine(grid).beliefs  # the preset's own solver, as crfmap infer runs it
 
 
 def log_line(text):

@@ -118,8 +118,7 @@ def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
     >>> x_image().truth.shape
     (32, 32)
     """
-    from crfmap import paths
-
+    from crfmap.data import data_file, have_data
     if isinstance(shape, (int, np.integer)) and not isinstance(shape, bool):
         h = w = int(shape)
     else:
@@ -130,8 +129,8 @@ def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
     if h < 4 or w < 4:
         raise InputError("shape", f"the X needs at least 4x4 cells, got {h}x{w}")
     resolution = check_positive("resolution", resolution)
-    if paths.have_data(X_IMAGE_FILE):
-        path = paths.data_file(X_IMAGE_FILE)
+    if have_data(X_IMAGE_FILE):
+        path = data_file(X_IMAGE_FILE)
         try:
             raw = np.loadtxt(path, delimiter=",")
         except ValueError as exc:

@@ -50,7 +50,7 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fu
     from crfmap.crf.engine import _message_update as F
     from crfmap.crf.engine import messages as M
     from crfmap.crf.engine import packed as P
-    from crfmap.crf.inference import _plain_kernels as K
+    from crfmap.crf.inference.schedules import plain_kernels
 
     key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1, fused)
     if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
@@ -59,10 +59,7 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fu
         kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._tile_max)
         kernels += (F._pass,)
     else:
-        kernels = {"checkerboard": (K._send_rows,), "flooding": (K._send_rows,),
-                   "sweep": (K._sweep_along_rows, K._sweep_along_columns),
-                   "thesis": (K._pull_iteration, K._bfs_order)}[schedule]
-        kernels += (M._beliefs,)
+        kernels = plain_kernels(schedule) + (M._beliefs,)
     said = announce(*kernels)
     if said:
         _announced.add(key)

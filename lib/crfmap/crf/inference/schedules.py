@@ -139,6 +139,92 @@ def schedule_settings(schedule):
                           f"must be one of {', '.join(SCHEDULES)} or their settings (Checkerboard(...), ...)")
 
 
+@dataclass
+class _PlainRun:
+    """What a plain schedule's iteration works on (one call of :func:`run_schedule`)."""
+
+    unary: np.ndarray
+    msg: np.ndarray
+    coef: np.ndarray
+    active: np.ndarray
+    use_active: bool
+    y0: int
+    y1: int
+    floor: float
+    damping: float
+    walk: np.ndarray | None  # the thesis's walk: the region (None: every cell)
+    scratch: dict  # a schedule's own state between iterations
+
+
+def _checkerboard_iteration(settings, r):
+    """Red cells send, then black cells."""
+    return max(max(over_rows(K._send_rows, r.y1 - r.y0, r.unary, r.msg, r.msg, r.coef, r.active, r.use_active,
+                             parity, r.y0, r.floor, r.damping), default=0.0) for parity in (0, 1))
+
+
+def _flooding_iteration(settings, r):
+    """Every message from the last iteration's."""
+    new = r.scratch.setdefault("new", r.msg.copy())
+    c = max(over_rows(K._send_rows, r.y1 - r.y0, r.unary, r.msg, new, r.coef, r.active, r.use_active, -1, r.y0,
+                      r.floor, r.damping), default=0.0)
+    r.msg[...] = new  # ``new`` keeps them too: slots not written next round (inactive senders) keep their values
+    return c
+
+
+def _sweep_iteration(settings, r):
+    """East-, west-, north-, south-bound (thesis sec. 2.6.2): each crosses the grid."""
+    shape = r.unary.shape
+    return max([max(over_rows(K._sweep_along_rows, r.y1 - r.y0, r.unary, r.msg, r.coef, r.active, r.use_active, d,
+                              r.y0, r.floor, r.damping), default=0.0) for d in (0, 1)]
+               + [max(over_rows(K._sweep_along_columns, shape[1], r.unary, r.msg, r.coef, r.active, r.use_active, d,
+                                r.y0, r.y1, r.floor, r.damping), default=0.0) for d in (2, 3)])
+
+
+def _thesis_iteration(settings, r):
+    """Breadth-first from the start cell, each visited cell pulling fresh messages; the next pass starts where this
+    one ended (sec. 2.6.2)."""
+    shape = r.unary.shape
+    if "start" not in r.scratch:
+        corner = {"lower-left": (0, 0), "lower-right": (0, shape[1] - 1),
+                  "upper-left": (shape[0] - 1, 0), "upper-right": (shape[0] - 1, shape[1] - 1)}
+        sy, sx = corner[settings.start]
+        use_walk = r.walk is not None
+        walk = r.walk if use_walk else np.ones((1, 1), np.bool_)
+        if use_walk and not walk[sy, sx]:
+            cells = np.argwhere(walk)
+            if cells.size:
+                sy, sx = (int(v) for v in cells[0])
+        r.scratch.update(start=(sy, sx), walk=walk, use_walk=use_walk)
+    sy, sx = r.scratch["start"]
+    order = K._bfs_order(shape[0], shape[1], r.scratch["walk"], r.scratch["use_walk"], sy, sx)
+    c = K._pull_iteration(r.unary, r.msg, r.coef, r.active, r.use_active, order, r.floor, r.damping)
+    if order.size:
+        r.scratch["start"] = divmod(int(order[-1]), shape[1])
+    return c
+
+
+# The registry of plain schedules: name -> (one iteration, the plain kernels it runs). SETTINGS, the CLI's choices,
+# the first-run notice (crfmap.crf.inference.compiling) and the study's warm-up are all read from here and SETTINGS:
+# a new schedule is its settings class, one entry here, and its kernels.
+PLAIN_RUNNERS = {
+    "checkerboard": (_checkerboard_iteration, ("_send_rows",)),
+    "flooding": (_flooding_iteration, ("_send_rows",)),
+    "sweep": (_sweep_iteration, ("_sweep_along_rows", "_sweep_along_columns")),
+    "thesis": (_thesis_iteration, ("_pull_iteration", "_bfs_order")),
+}
+
+
+def plain_kernels(name: str) -> tuple:
+    """The numba kernels the plain schedule ``name`` runs (for the first-run notice and the warm-up).
+
+    >>> [k.__name__ for k in plain_kernels("sweep")]
+    ['_sweep_along_rows', '_sweep_along_columns']
+    """
+    if name not in PLAIN_RUNNERS:
+        raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)}, got {name!r}")
+    return tuple(getattr(K, kernel) for kernel in PLAIN_RUNNERS[name][1])
+
+
 def run_schedule(settings, probability, tables, link, max_iter, tol, senders, messages, dtype, floor, clamped):
     """A plain schedule from start to end; returns (beliefs, messages, changes).
 
@@ -151,52 +237,18 @@ def run_schedule(settings, probability, tables, link, max_iter, tol, senders, me
     msg = initial_messages(shape, dtype) if messages is None else floored(messages, dtype, shape, floor)
     if clamped[0] is not None:
         clamp_messages(clamped[0], tables, msg, clamped[1])
-    # the thesis's walk visits the region (clamped cells included); only senders send
-    walk = clamped[1]
     if senders is None:
-        active = np.ones((1, 1), dtype=np.bool_)
-        use_active = False
-        y0, y1 = 0, shape[0]
+        active, use_active, y0, y1 = np.ones((1, 1), dtype=np.bool_), False, 0, shape[0]
     else:
-        active = senders
-        use_active = True
+        active, use_active = senders, True
         rows = np.flatnonzero(active.any(axis=1))
         y0, y1 = (int(rows[0]), int(rows[-1]) + 1) if rows.size else (0, 0)
-    floor = float(floor)
-    damping = float(settings.damping)
+    # the thesis's walk visits the region (clamped cells included); only senders send
+    run = _PlainRun(unary, msg, coef, active, use_active, y0, y1, float(floor), float(settings.damping), clamped[1], {})
+    iteration = PLAIN_RUNNERS[settings.name][0]
     changes = []
-    schedule = settings.name
-    if schedule == "flooding":
-        new = msg.copy()
-    if schedule == "thesis":
-        corner = {"lower-left": (0, 0), "lower-right": (0, shape[1] - 1),
-                  "upper-left": (shape[0] - 1, 0), "upper-right": (shape[0] - 1, shape[1] - 1)}
-        sy, sx = corner[settings.start]
-        use_walk = walk is not None
-        walk = walk if use_walk else np.ones((1, 1), np.bool_)
-        if use_walk and not walk[sy, sx]:
-            cells = np.argwhere(walk)
-            if cells.size:
-                sy, sx = (int(v) for v in cells[0])
     for _ in range(max_iter):
-        if schedule == "checkerboard":  # red cells send, then black cells
-            c = max(max(over_rows(K._send_rows, y1 - y0, unary, msg, msg, coef, active, use_active, parity, y0,
-                                  floor, damping), default=0.0) for parity in (0, 1))
-        elif schedule == "flooding":
-            c = max(over_rows(K._send_rows, y1 - y0, unary, msg, new, coef, active, use_active, -1, y0, floor,
-                              damping), default=0.0)
-            msg, new = new, msg
-            new[...] = msg  # slots not written this round (inactive senders) keep their values
-        elif schedule == "sweep":  # east-, west-, north-, south-bound (thesis sec. 2.6.2): each crosses the grid
-            c = max([max(over_rows(K._sweep_along_rows, y1 - y0, unary, msg, coef, active, use_active, d, y0, floor,
-                                   damping), default=0.0) for d in (0, 1)]
-                    + [max(over_rows(K._sweep_along_columns, shape[1], unary, msg, coef, active, use_active, d, y0, y1,
-                                     floor, damping), default=0.0) for d in (2, 3)])
-        else:
-            order = K._bfs_order(shape[0], shape[1], walk, use_walk, sy, sx)
-            c = K._pull_iteration(unary, msg, coef, active, use_active, order, floor, damping)
-            if order.size:  # the next pass starts where this one ended (sec. 2.6.2)
-                sy, sx = divmod(int(order[-1]), shape[1])
+        c = iteration(settings, run)
         changes.append(float(c))
         if c < tol:
             break

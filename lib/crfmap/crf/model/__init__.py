@@ -1,1 +1,1 @@
-"""What the CRF is: its potential tables (``potentials``), named configurations (``presets``), hard evidence (``evidence``)."""
+"""What the CRF is: its potential tables (``potentials``), hard evidence (``evidence``)."""

@@ -1,0 +1,8 @@
+"""The study's analyses of the presets: the searches that chose them and what coupling adds.
+
+- :mod:`crfstudy.analysis.preset_search`: ``coordinate_search`` (the search that chose the certainty preset, on Intel)
+- :mod:`crfstudy.analysis.peer_search`: the Hilbert map's parameter search
+- :mod:`crfstudy.analysis.ablations`: ``ablation_presets``, ``IsotonicEvidence``, ``PlattRaw``
+- :mod:`crfstudy.analysis.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``scaled_scores``, ``fit_pseudolikelihood``
+- :mod:`crfstudy.analysis.samecells`: ``fold_scores``, ``block_scores`` (every method on the cells all decide)
+"""

@@ -1,0 +1,216 @@
+"""The search that chooses the certainty preset's constants: a coordinate search on one recording.
+
+The certainty preset (:mod:`crfmap.crf.presets`) has seven constants: the hidden coupling J, the
+log-odds of the first net hit and of each further one ``(a, b)``, the same for net passes
+``(c, d)``, the cap ``limit`` on one cell's |log-odds| and the LBP ``margin``. They are chosen by
+the scan-split Brier score (all cells the second half observed; :mod:`crfmap.assess.scansplit`)
+of the *training* recording only (Intel):
+
+1. start from :data:`START` (each constant on its grid, :data:`GRID`);
+2. for each constant in turn (:data:`ORDER`) score every value of its grid with the others fixed,
+   and keep the best (strictly lower only: a tie keeps the current value);
+3. repeat whole rounds until a round changes nothing (or ``max_rounds``).
+
+Every configuration is scored once (a cache): :attr:`SearchResult.trace` lists them in the order
+they were first scored, :attr:`SearchResult.configurations` counts them.
+
+The full search on Intel (5 cm cells, even / odd scans) scores about 60 configurations, a minute or
+two of LBP: more than a notebook of ``make reproduce`` should spend. Its result is kept in
+:data:`CACHE` (``python -m crfstudy.analysis.preset_search`` reruns it and rewrites the file; ``--check``
+reruns it and compares), and notebook 10 re-scores the cached best and the preset's own constants.
+
+>>> from crfmap.assess.scansplit import ScanSplit
+>>> rng = np.random.default_rng(0)
+>>> sp = ScanSplit(*(rng.integers(0, 3, (12, 12)) for _ in range(4)))
+>>> r = coordinate_search(sp, grid={"coupling": (0.0, 0.3), "limit": (2.0, 4.0)},
+...                       start=dict(START, coupling=0.0, limit=2.0))
+>>> r.configurations, sorted(r.best) == sorted(START)
+(3, True)
+"""
+from __future__ import annotations
+
+import json
+import sys
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from crfmap.errors import InputError
+
+# the grid each constant is searched on (a, c: first net hit / pass; b, d: each further one)
+GRID = {
+    "coupling": (0.2, 0.25, 0.3, 0.35, 0.4),  # Ising J, all below J_c = 0.44
+    "occupied_first": (0.5, 1.0, 1.5, 2.0, 2.5),
+    "occupied_further": (0.1, 0.2, 0.3, 0.5),
+    "free_first": (0.25, 0.5, 0.75, 1.0, 1.5),
+    "free_further": (0.1, 0.2, 0.3, 0.5),
+    "limit": (3.0, 4.0, 5.0, 6.0),
+    "margin": (2, 3, 5, 8),
+}
+CACHE = Path(__file__).with_name("preset_search_intel.json")  # the full search's result on Intel
+TRAINING = "carmen/intel-corrected.log.gz"  # the recording the search runs on (crfmap.data.data_file)
+TRAINING_RESOLUTION = 0.05  # [m] its cells, as notebook 10
+ORDER = tuple(GRID)  # the coordinates in the order one round visits them
+START = {"coupling": 0.3, "occupied_first": 1.0, "occupied_further": 0.2, "free_first": 1.0, "free_further": 0.2,
+         "limit": 4.0, "margin": 3}
+
+
+def preset_constants(preset) -> dict:
+    """The seven searched constants of a :class:`~crfmap.crf.presets.Preset`, named as in :data:`GRID`.
+
+    >>> from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+    >>> preset_constants(get_preset(DEFAULT_PRESET))["margin"]
+    5
+    """
+    return {"coupling": round(preset.coupling, 9), "occupied_first": preset.occupied[0],
+            "occupied_further": preset.occupied[1], "free_first": preset.free[0], "free_further": preset.free[1],
+            "limit": preset.limit, "margin": preset.margin}
+
+
+def preset_from(constants: dict, base: str | None = None):
+    """The ``base`` preset (None: ``DEFAULT_PRESET``) with the constants of ``constants`` (names of :data:`GRID`)."""
+    from crfmap.crf.presets import coupling_table, get_preset
+
+    unknown = set(constants) - set(GRID)
+    if unknown:
+        raise InputError("constants", f"unknown names {sorted(unknown)}; expected some of {', '.join(GRID)}")
+    p = get_preset() if base is None else get_preset(base)
+    c = {**preset_constants(p), **constants}
+    return replace(p, hidden=coupling_table(c["coupling"]),
+                   occupied=(float(c["occupied_first"]), float(c["occupied_further"])),
+                   free=(float(c["free_first"]), float(c["free_further"])), limit=float(c["limit"]),
+                   margin=int(c["margin"]))
+
+
+def search_brier(split, constants: dict, dtype=np.float32, max_iter: int = 5000) -> float:
+    """Scan-split Brier score (all cells) of the preset with ``constants`` on ``split``."""
+    from crfmap.assess.scansplit import score
+
+    beliefs = preset_from(constants).refine(hits=split.first_hits, passes=split.first_passes, dtype=dtype,
+                                            max_iter=max_iter).beliefs.probability
+    return score(split, {"p": beliefs}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
+
+
+@dataclass
+class SearchResult:
+    """What :func:`coordinate_search` returns: the best constants, the trace and the grid searched."""
+
+    best: dict
+    best_brier: float
+    trace: list = field(default_factory=list)  # {"round", "coordinate", **constants, "brier"} per new configuration
+    rounds: int = 0
+    converged: bool = False  # True: the last round changed nothing
+    grid: dict = field(default_factory=dict)
+    start: dict = field(default_factory=dict)
+
+    @property
+    def configurations(self) -> int:
+        """How many distinct configurations were scored."""
+        return len(self.trace)
+
+    def as_dict(self) -> dict:
+        return {"best": self.best, "best_brier": self.best_brier, "rounds": self.rounds, "converged": self.converged,
+                "configurations": self.configurations, "grid": {k: list(v) for k, v in self.grid.items()},
+                "start": self.start, "order": list(self.grid), "trace": self.trace}
+
+
+def coordinate_search(split, grid: dict | None = None, start: dict | None = None, max_rounds: int = 10,
+                      progress: bool = False, **options) -> SearchResult:
+    """Coordinate search of the certainty preset's constants by the scan-split Brier score of ``split``.
+
+    ``grid``: {constant: values} (default :data:`GRID`; constants it leaves out stay at ``start``'s
+    or the preset's value); ``start``: the first configuration (default :data:`START`), each of its
+    searched values on its grid; ``options`` go to :func:`search_brier`.
+    """
+    from tqdm.auto import tqdm
+
+    grid = {k: tuple(v) for k, v in (GRID if grid is None else grid).items()}
+    start = dict(START if start is None else start)
+    for name, values in grid.items():
+        if name not in GRID:
+            raise InputError("grid", f"unknown constant {name!r}; expected some of {', '.join(GRID)}")
+        if not values:
+            raise InputError("grid", f"{name} has no values to try")
+        if start.get(name) not in values:
+            raise InputError("start", f"{name} = {start.get(name)!r} is not on its grid {list(values)}")
+    if not (isinstance(max_rounds, int) and max_rounds >= 1):
+        raise InputError("max_rounds", f"must be a positive integer, got {max_rounds!r}")
+    scores, trace = {}, []
+    bar = tqdm(desc="preset search", disable=not progress, leave=False)
+
+    def brier(config, round_, coordinate):
+        key = tuple(sorted(config.items()))
+        if key not in scores:
+            scores[key] = search_brier(split, config, **options)
+            trace.append({"round": round_, "coordinate": coordinate, **config, "brier": scores[key]})
+            bar.update()
+        return scores[key]
+
+    current, best = dict(start), brier(start, 0, "start")
+    rounds, converged = 0, False
+    for rounds in range(1, max_rounds + 1):
+        changed = False
+        for name in (k for k in ORDER if k in grid):
+            for value in grid[name]:
+                candidate = dict(current, **{name: value})
+                b = brier(candidate, rounds, name)
+                if b < best:
+                    current, best, changed = candidate, b, True
+        if not changed:
+            converged = True
+            break
+    bar.close()
+    return SearchResult(best=current, best_brier=float(best), trace=trace, rounds=rounds, converged=converged,
+                        grid=grid, start=start)
+
+
+def load_cached(path: Path | None = None) -> dict:
+    """The cached full search on Intel (:meth:`SearchResult.as_dict` plus ``recording``, ``resolution_m``)."""
+    target = CACHE if path is None else Path(path)
+    try:
+        return json.loads(target.read_text())
+    except (OSError, ValueError) as e:
+        raise InputError(target, f"cannot read the cached preset search ({e})") from None
+
+
+def run_training_search(progress: bool = True) -> dict:
+    """The full search on the training recording (Intel, even / odd scans at 5 cm), as the cache holds it."""
+    from crfmap.assess.scansplit import scan_split
+    from crfmap.commands.build import load_recording
+    from crfmap.data import data_file
+
+    recording = load_recording(data_file(TRAINING))
+    split = scan_split(recording.scans, TRAINING_RESOLUTION)
+    result = coordinate_search(split, progress=progress).as_dict()
+    return {**result, "recording": TRAINING, "resolution_m": TRAINING_RESOLUTION, "split": "even/odd scans"}
+
+
+def main(argv=None) -> int:
+    """``python -m crfstudy.analysis.preset_search [--check]``: rerun the search on Intel and (re)write or check the cache."""
+    from crfmap.io.atomic import atomic_path
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv not in ([], ["--check"]):
+        print("usage: python -m crfstudy.analysis.preset_search [--check]", file=sys.stderr)
+        return 2
+    try:
+        result = run_training_search()
+    except InputError as e:  # the data missing included
+        print(f"crfmap preset search: {e}", file=sys.stderr)
+        return 2
+    if argv == ["--check"]:
+        cached = load_cached()
+        same = cached["best"] == result["best"] and len(cached["trace"]) == len(result["trace"])
+        print(f"search best {result['best']} (Brier {result['best_brier']:.7f}); cache "
+              f"{'agrees' if same else 'DIFFERS: ' + str(cached['best'])}")
+        return 0 if same else 1
+    with atomic_path(CACHE) as tmp:
+        Path(tmp).write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {CACHE}: best {result['best']} (Brier {result['best_brier']:.7f}), "
+          f"{result['configurations']} configurations, {result['rounds']} rounds")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,14 @@
+"""The thesis's experiments as functions the notebooks call: the scan -> grid -> LBP -> score pipeline, the explorer, the background chapter.
+
+Modules:
+
+- :mod:`crfstudy.experiments.pipeline`: ``scan_scene``, ``evaluate_pipeline``, ``train_and_test``, ``search_tables``, ``PipelineResult``, ``TrainTest``
+- :mod:`crfstudy.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``, ``warm_up``
+- :mod:`crfstudy.experiments.explorer_view` / ``explorer_panel``: the live figure updated in place, the widget panel
+- :mod:`crfstudy.experiments.office_online`: ``map_online``, ``online_numbers``, ``OnlineRun``, ``versus_offline``, ``near_versus_offline``, ``default_table_drift``
+- :mod:`crfstudy.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
+- :mod:`crfstudy.experiments.thesis_learning`: the learning experiments' tables (notebooks 05, 06): ``make_learners``, ``metrics_table``, ``potentials_rows``, ``results_summary``, ``same_cells_predictions``
+- :mod:`crfstudy.experiments.scene_figures`: ``draw`` (a grid with the robot's start), ``landscape_figure``
+- :mod:`crfstudy.experiments.occlusion_why`: why the occlusion result does not reproduce (``why_study`` and its tables)
+- :mod:`crfstudy.experiments.speed_tables` / ``speed_figures``: notebook 09's tables and goals figure from ``crfmap bench`` records
+"""

@@ -1,0 +1,323 @@
+"""Render the reproduction report from its template and the generated figures and tables.
+
+The template ``paper/paper.md`` holds the prose; placeholders pull in what the notebooks made,
+so a number in the report is always the one the code produced:
+
+- ``{{table:NAME}}``: the Markdown table ``paper/generated/NAME.md``;
+- ``{{figure:NAME|caption}}``: the image ``figures/NAME.png``; ``{{figure:NAME|caption|width=60%}}``
+  gives its width on the page (a one-panel figure need not fill the text width);
+- ``{{number:NAME.key.subkey|fmt}}``: a value from ``paper/generated/NAME.json`` (``fmt`` e.g. ``.4f``);
+- ``{{missed:NAME}}``: the rows of the generated table ``NAME`` (with "value" and "goal" columns)
+  whose value misses its goal (:func:`missed_goals`), as prose;
+- ``{{build:KEY.subkey|fmt}}``: a fact about the build itself (package versions, hardware, data
+  checksums, seeds, the last run's wall clock), read when the paper is built (:mod:`crfstudy.repro.buildinfo`).
+
+HTML comments (``<!-- ... -->``) are notes for the authors: they are removed before anything is filled,
+so a placeholder or a TODO inside one never reaches the report.
+
+The result is ``paper/generated/paper.md``. A placeholder whose file is missing renders as a
+visible "not generated" note, and :func:`build_paper` lists them. The paper is built only from full
+default runs: with ``strict`` (the default, and what the workflow's paper rule runs) a result made by a
+quick run or with non-default parameters (:func:`crfstudy.repro.provenance.problem`) stops the build
+with one line naming the file. ``python -m crfstudy.repro.paper`` is that build on the command line
+(exit status 2 and one stderr line on a refusal).
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+from pathlib import Path
+
+import sys
+
+from crfstudy import paths
+from crfmap.crf.presets import DEFAULT_PRESET
+from crfmap.errors import InputError
+from crfmap.io.atomic import atomic_path
+from crfstudy.repro import provenance
+
+COMMENT = re.compile(r"<!--.*?-->\n?", re.S)
+PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build|missed):([^}|]+)(?:\|([^}]*))?\}\}")
+
+
+def _relative(target: Path, start: Path) -> str:
+    return Path(os.path.relpath(target, start)).as_posix()
+
+
+def _check(path: Path, strict: bool) -> None:
+    why = provenance.problem(path) if strict else None
+    if why:
+        raise InputError(path, why.split(": ", 1)[1])
+
+
+# The short method and recording labels of the "beyond the thesis" results, and their names in the report.
+METHOD_NAMES = {
+    "raw": "raw grid", "logodds": "log-odds grid", "mean3x3": "3x3 mean", "median3x3": "3x3 median",
+    "closing3x3": "3x3 closing", "thesis": "thesis tables", "graphcut": "graph cut",
+    DEFAULT_PRESET: f"{DEFAULT_PRESET} preset", f"{DEFAULT_PRESET}-MAP": f"{DEFAULT_PRESET} preset, MAP",
+    f"{DEFAULT_PRESET}-T": f"{DEFAULT_PRESET} preset, temperature",
+    "best-table": "oracle table", "table-from-training": "Intel's table",
+    "hilbert": "Bayesian Hilbert map", "octomap": "OctoMap",
+    "intel": "Intel", "aces": "ACES", "ros2": "ROS 2 bag", "ros1": "ROS 1 bag", "csail": "MIT CSAIL",
+    "fr101": "Freiburg 101",
+}
+
+
+def _format_value(value, fmt=None) -> str:
+    """A generated value as prose: ``fmt`` for numbers, lists as "a, b" ("none" when empty), None as "n/a".
+
+    A list's labels are printed under their names in the report (:data:`METHOD_NAMES`).
+
+    >>> _format_value(0.12345, ".3f"), _format_value(["best-table", "thesis"]), _format_value([])
+    ('0.123', 'oracle table, thesis tables', 'none')
+    """
+    if value is None:
+        return "n/a"
+    if isinstance(value, list):
+        return ", ".join(METHOD_NAMES.get(v, v) if isinstance(v, str) else _format_value(v, fmt)
+                         for v in value) if value else "none"
+    return format(value, fmt) if fmt else str(value)
+
+
+def method_names(table_text: str) -> str:
+    """A "beyond the thesis" table with its method and recording labels (whole cells) under their report names.
+
+    >>> method_names("| recording | method |\\n|---|---|\\n| intel | best-table |")
+    '| recording | method |\\n|---|---|\\n| Intel | oracle table |'
+    """
+    def row(line):
+        if not line.startswith("|"):
+            return line
+        cells = line.split("|")
+        return "|".join(f" {METHOD_NAMES[c.strip()]} " if c.strip() in METHOD_NAMES else c for c in cells)
+
+    return "\n".join(row(line) for line in table_text.split("\n"))
+
+
+def attach_caption(table_text: str) -> str:
+    """A saved table with its caption paragraph turned into the table's own caption (pandoc's "Table:" line).
+
+    A caption written as a paragraph before the table can end a page with its table on the next; a
+    table caption stays with its table (PDF: a table figure; HTML: ``<caption>``).
+
+    >>> attach_caption("Table 1: the joint table.\\n\\n| a |\\n|---|\\n| 1 |\\n")
+    '| a |\\n|---|\\n| 1 |\\n\\nTable: Table 1: the joint table.'
+    """
+    lines = table_text.strip("\n").splitlines()
+    first_row = next((i for i, line in enumerate(lines) if line.startswith("|")), None)
+    if not first_row:
+        return "\n".join(lines)
+    caption = " ".join(" ".join(lines[:first_row]).split())
+    body = [line for line in lines[first_row:] if line.startswith("|")]
+    rest = [line for line in lines[first_row:] if not line.startswith("|")]
+    text = "\n".join(body) + f"\n\nTable: {caption}"
+    return text + ("\n\n" + "\n".join(rest).strip() if any(r.strip() for r in rest) else "")
+
+
+# Code names that generated tables carry (notebook labels, parameter names), and the plain words the report
+# prints instead: a reader of the PDF should not need the library's identifiers. Longer names first.
+PLAIN_WORDS = (
+    ("crfmap.assess.learning.learn_thesis, ", ""),
+    ("LBP crfmap.crf.inference.reference.reference_lbp", "LBP (crfmap's reference implementation)"),
+    ("reference_lbp", "reference LBP"),
+    ("learn_pseudolikelihood", "pseudo-likelihood learner"),
+    ("learn_gradient", "gradient learner"),
+    ("learn_thesis", "thesis learner"),
+    ("schedule 'thesis', max_iter=1", "the thesis's schedule, one iteration"),
+    ("the 'thesis' schedule", "the thesis's schedule"),
+    ("p_hit = ", "P(hit) = "),
+    ("p_miss = ", "P(miss) = "),
+    ("logodds_limit = ", "log-odds limit = "),
+    ("occupied_first", "occupied, first hit"),
+    ("occupied_further", "occupied, further hits"),
+    ("free_first", "free, first pass"),
+    ("free_further", "free, further passes"),
+    ("equal to build_grid cell for cell", "equal to the offline grid builder's, cell for cell"),
+    ("noisy_image sigma", "noisy image, sigma"),
+    ("(crfstudy.bench.goals; ", "("),
+    (", crfmap.crf.inference.lbp.message", ", by crfmap's message function"),
+    # the report's words for the tables' jargon (the glossary at the report's start)
+    (" with the thesis's pairing (receiver) and the proper pairwise one (oriented)",
+     " with the thesis's pairing and the proper pairwise one"),
+    ("(receiver pairing)", "(thesis pairing)"),
+    ("(oriented pairing)", "(pairwise pairing)"),
+    (", oriented pairing", ", pairwise pairing"),
+    ("search+gradient", "coarse search, then gradient"),
+    ("(search + gradient, extra)", "(coarse search, then gradient; extra)"),
+    ("(near known)", "(near observations)"),
+)
+
+
+def plain_words(text: str) -> str:
+    """A generated table with the library's code names replaced by the words the report uses.
+
+    >>> plain_words("| After LBP (learn_thesis, converged) | 0.02 |")
+    '| After LBP (thesis learner, converged) | 0.02 |'
+    """
+    for code, words in PLAIN_WORDS:
+        text = text.replace(code, words)
+    return text
+
+
+_GOAL = re.compile(r"^\s*(>=|<=)\s*([0-9.eE+-]+)")
+
+
+def missed_goals(header, rows) -> str:
+    """The rows whose value misses its goal ("<= x" or ">= x"), as "what (grid): value, goal ..." clauses.
+
+    Rows without a goal or a number are left out; "none" when every goal was met.
+
+    >>> missed_goals(["measurement", "grid", "value", "goal"],
+    ...              [["kernel [Mcell/s]", "512^2", 162, ">= 1000"], ["start [s]", "", 0.4, "<= 2"], ["x", "", None, "<= 1"]])
+    'kernel [Mcell/s] (512^2): 162, goal >= 1000'
+    """
+    value_at, goal_at = header.index("value"), header.index("goal")
+    label_at = [i for i in range(len(header)) if i not in (value_at, goal_at)]
+    missed = []
+    for row in rows:
+        goal = _GOAL.match(str(row[goal_at] or ""))
+        if not goal or not isinstance(row[value_at], (int, float)):
+            continue
+        value, bound = float(row[value_at]), float(goal.group(2))
+        if (value < bound) if goal.group(1) == ">=" else (value > bound):
+            label = " ".join(str(row[label_at[0]]).split())
+            extra = ", ".join(str(row[i]) for i in label_at[1:] if row[i])
+            missed.append(f"{label}{f' ({extra})' if extra else ''}: {row[value_at]:g}, goal {row[goal_at]}")
+    return "; ".join(missed) or "none"
+
+
+_SIZE = re.compile(r"^\s*width=\d+%\s*$")
+
+
+def _split_size(text: str) -> tuple:
+    """A figure placeholder's "caption|width=N%" as (caption, "width=N%"); no size: (caption, "").
+
+    >>> _split_size("Fig. 20: the X.|width=45%"), _split_size("Fig. 2: a grid")
+    (('Fig. 20: the X.', 'width=45%'), ('Fig. 2: a grid', ''))
+    """
+    caption, _, size = text.rpartition("|")
+    return (caption, size.strip()) if caption and _SIZE.match(size) else (text, "")
+
+
+def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
+    """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
+    build_facts: dict = {}
+
+    def replace(match):
+        kind, name, extra = match.group(1), match.group(2).strip(), match.group(3)
+        if kind == "missed":
+            f = paths.GENERATED / f"{name}.json"
+            try:
+                table = json.loads(f.read_text())
+                text = missed_goals(table["header"], table["rows"])
+            except (OSError, KeyError, ValueError):
+                missing.append(f"goals of {name}")
+                return f"*(goals of {name} not generated)*"
+            _check(f, strict)
+            return text
+        if kind == "build":
+            if not build_facts:
+                from crfstudy.repro import buildinfo
+
+                build_facts.update(buildinfo.describe())
+            value = build_facts
+            try:
+                for k in name.split("."):
+                    value = value[k]
+            except (KeyError, TypeError):
+                missing.append(f"build fact {name}")
+                return f"*(build fact {name} not known)*"
+            return _format_value(value, extra)
+        if kind == "table":
+            f = paths.GENERATED / f"{name}.md"
+            if not f.exists():
+                missing.append(f"table {name}")
+                return f"*(table {name} not generated)*"
+            _check(f, strict)
+            text = plain_words(provenance.strip(f.read_text()))
+            return attach_caption(method_names(text) if name.startswith("beyond") else text)
+        if kind == "figure":
+            f = paths.FIGURES / f"{name}.png"
+            if not f.exists():
+                missing.append(f"figure {name}")
+                return f"*(figure {name} not generated)*"
+            _check(f, strict)
+            caption, size = _split_size(extra or name)
+            return f"![{caption}]({_relative(f, out_dir)})" + (f"{{{size}}}" if size else "")
+        file_name, *keys = name.split(".")
+        f = paths.GENERATED / f"{file_name}.json"
+        try:
+            value = json.loads(f.read_text())
+            for k in keys:
+                value = value[int(k)] if isinstance(value, list) else value[k]
+        except (OSError, KeyError, IndexError, ValueError):
+            missing.append(f"number {name}")
+            return f"*(number {name} not generated)*"
+        _check(f, strict)
+        if isinstance(value, dict):  # a mapping is a table, not a number: it must not reach the prose
+            missing.append(f"number {name} (a mapping, not a value)")
+            return f"*(number {name} is not a single value)*"
+        return _format_value(value, extra)
+
+    return PLACEHOLDER.sub(replace, COMMENT.sub("", template))
+
+
+def build_paper(template: Path | None = None, output: Path | None = None, strict: bool = True,
+                publish: bool = True) -> Path:
+    """Render the template into ``paper/generated/paper.md``; returns its path.
+
+    With ``strict`` a quick or non-default result raises :class:`crfmap.errors.InputError` naming
+    the file, before anything is written. ``publish=True`` also builds ``paper.pdf`` and
+    ``paper.html`` beside it (:mod:`crfstudy.repro.publish`).
+    """
+    template = Path(template or paths.PAPER / "paper.md")
+    output = Path(output or paths.GENERATED / "paper.md")
+    missing: list = []
+    text = render(template.read_text(), output.parent, missing, strict=strict)
+    if missing:
+        text += "\n\n---\nNot generated when this report was built: " + ", ".join(missing) + "\n"
+    with atomic_path(output) as tmp:
+        Path(tmp).write_text(text)
+    if publish:
+        from crfstudy.repro.publish import publish as publish_paper
+
+        publish_paper(output)
+    return output
+
+
+def main(argv=None) -> int:
+    """``python -m crfstudy.repro.paper``: build the paper from full default runs (the workflow's paper rule)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m crfstudy.repro.paper", description=main.__doc__)
+    parser.add_argument("--template", type=Path, help="default: paper/paper.md")
+    parser.add_argument("--output", type=Path, help="default: paper/generated/paper.md")
+    parser.add_argument("--timings", type=Path, help="also write each notebook's run time here (JSON)")
+    parser.add_argument("--executed", type=Path, nargs="*", default=[], help="the executed notebooks")
+    args = parser.parse_args(argv)
+    try:
+        out = build_paper(args.template, args.output)
+    except InputError as error:
+        print(f"paper: refused: {error}", file=sys.stderr)
+        return 2
+    if args.timings:
+        write_timings(args.executed, args.timings)
+    print(f"paper: {out}")
+    return 0
+
+
+def write_timings(executed, target) -> dict:
+    """Each executed notebook's run time (papermill's record) as JSON ``{"seconds": {...}, "total_seconds": t}``."""
+    seconds = {}
+    for notebook in executed:
+        meta = json.loads(Path(notebook).read_text()).get("metadata", {}).get("papermill", {})
+        seconds[Path(notebook).name] = meta.get("duration")
+    timings = {"seconds": seconds, "total_seconds": sum(v for v in seconds.values() if v)}
+    with atomic_path(Path(target)) as tmp:
+        Path(tmp).write_text(json.dumps(timings, indent=2, sort_keys=True) + "\n")
+    return timings
+
+
+if __name__ == "__main__":
+    sys.exit(main())
