@@ -183,3 +183,54 @@ def test_evaluate_max_range_reaches_the_reader(tmp_path, capsys):
         assert main(["evaluate", str(path), *extra, "--methods", "raw", "--boot", "0"]) == 0
         heads.append(capsys.readouterr().out.splitlines()[0])
     assert heads[0] != heads[1]  # readings beyond 3 m no longer end in hits: other cells, another map
+
+
+def test_a_byte_order_mark_does_not_drop_the_first_line(tmp_path):
+    text = "FLASER 9 " + " ".join(["2.50"] * 9) + " 0 0 0 0 0 0 1.0 nohost 1.0\n" + carmen_text()
+    (tmp_path / "bom.log").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert read_carmen(tmp_path / "bom.log", max_range=None).scans.ranges.shape == (5, 9)
+
+
+def _map_writer(path, value, rounds):
+    from crfmap.grid import OccupancyGrid
+    from crfmap.io.map_server import save_map
+
+    for _ in range(rounds):  # the image says `value` (scale mode), the YAML's resolution says it too
+        save_map(OccupancyGrid(np.full((30, 30), value), resolution=value), path, mode="scale")
+
+
+def test_concurrent_writers_never_mix_a_maps_image_and_yaml(tmp_path):
+    from crfmap.io.map_server import load_map
+
+    path = tmp_path / "m.yaml"
+    _map_writer(path, 0.25, 1)
+    ctx = multiprocessing.get_context("fork")
+    writers = [ctx.Process(target=_map_writer, args=(path, v, 80)) for v in (0.25, 0.75)]
+    for w in writers:
+        w.start()
+    mixed = reads = 0
+    while any(w.is_alive() for w in writers) or reads < 50:
+        g = load_map(path)
+        reads += 1
+        mixed += abs(g.resolution - g.probability[0, 0]) > 0.01
+    for w in writers:
+        w.join()
+    g = load_map(path)  # and the final pair is one writer's
+    assert mixed == 0 and reads >= 50 and abs(g.resolution - g.probability[0, 0]) <= 0.01
+    assert not list(tmp_path.glob(".*tmp"))
+
+
+def test_two_simulations_into_one_new_folder_leave_one_whole_bag(tmp_path):
+    import subprocess
+    import sys
+
+    code = "import sys; from crfmap.cli import main; sys.exit(main(sys.argv[1:]))"
+    argv = [sys.executable, "-c", code, "simulate", "x", str(tmp_path / "sim"), "--quiet", "--beams", "8"]
+    runs = [subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    results = [(p.wait(), p.stderr.read()) for p in runs]
+    assert sorted(rc for rc, _ in results) == [0, 2]  # one wrote its bag, the other refused in one line
+    err = next(e for rc, e in results if rc == 2).strip()
+    assert len(err.splitlines()) == 1 and "sim" in err and ("another process" in err or "already exists" in err)
+    from crfmap.io.bag_reader import read_bag
+
+    assert len(read_bag(tmp_path / "sim").scans) > 0 and not list(tmp_path.glob(".*tmp"))

@@ -46,7 +46,7 @@ from crfmap.crf.model.potentials import (
     message_coefficients,
 )
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid, as_grid
+from crfmap.grid import OccupancyGrid, as_grid, check_probability_array
 
 
 def message(table, sender_p) -> float:
@@ -141,6 +141,8 @@ def infer(
     >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
     (True, True)
     """
+    if isinstance(grid, np.ma.MaskedArray):  # the fused path reads the data under the mask: refuse masked cells
+        grid = check_probability_array(grid, "grid")
     settings = schedule_settings(schedule)
     hidden = check_table(hidden, "hidden")
     link = check_table(link, "link")
