@@ -182,7 +182,7 @@ def check_path_arg(path, what="file name"):
     return Path(path)
 
 
-MAX_EXTENT_M = 1e8  # [m] no map reaches this far (the Earth is 4e7 m round): a unit mistake or a corrupt field
+from crfmap.grid import MAX_EXTENT_M  # noqa: E402  (re-exported: the bound on a grid's reach, [m])
 
 
 def check_grid_geometry(source, resolution, origin, width, height):

@@ -15,6 +15,7 @@ import numpy as np
 from crfmap.errors import InputError
 
 UNKNOWN = 0.5  # P(occupied) of a cell nobody has seen
+MAX_EXTENT_M = 1e8  # [m] no map reaches this far (the Earth is 4e7 m round): a unit mistake or a corrupt field
 
 
 def check_probability_array(values, name="grid") -> np.ndarray:
@@ -23,6 +24,11 @@ def check_probability_array(values, name="grid") -> np.ndarray:
     >>> check_probability_array([[0.0, 0.5], [1.0, 0.25]]).shape
     (2, 2)
     """
+    if isinstance(values, np.ma.MaskedArray):  # np.asarray would drop the mask and read masked cells as data
+        if np.ma.count_masked(values):
+            raise InputError(name, f"a masked array with {int(np.ma.count_masked(values))} masked cell(s): fill them "
+                                   "first (values.filled(0.5) makes them unknown)")
+        values = values.data
     arr = np.asarray(values)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer) or arr.dtype == bool):
         raise InputError(name, f"expected a numeric array, got dtype {arr.dtype}")
@@ -58,14 +64,24 @@ class OccupancyGrid:
 
     def __post_init__(self):
         self.probability = check_probability_array(self.probability, "grid")
-        if not (isinstance(self.resolution, (int, float, np.floating)) and math.isfinite(self.resolution) and self.resolution > 0):
-            raise InputError("grid", f"resolution must be a positive number of metres, got {self.resolution!r}")
+        number = (int, float, np.integer, np.floating)
+        if not (isinstance(self.resolution, number) and not isinstance(self.resolution, (bool, np.bool_))
+                and math.isfinite(self.resolution) and self.resolution > 0):
+            raise InputError("resolution", f"must be a positive number of metres, got {self.resolution!r}")
         self.resolution = float(self.resolution)
-        origin = tuple(float(v) for v in self.origin)
-        if len(origin) == 2:
-            origin = origin + (0.0,)
-        if len(origin) != 3 or not all(math.isfinite(v) for v in origin):
-            raise InputError("grid", f"origin must be (x, y, yaw), got {self.origin!r}")
+        given = self.origin
+        if isinstance(given, (str, bytes)) or not hasattr(given, "__len__") or len(given) not in (2, 3) \
+                or not all(isinstance(v, number) and not isinstance(v, (bool, np.bool_)) for v in given):
+            raise InputError("origin", f"must be (x, y[, yaw]) numbers, got {given!r}")
+        origin = tuple(float(v) for v in given) + ((0.0,) if len(given) == 2 else ())
+        if not all(math.isfinite(v) for v in origin):
+            raise InputError("origin", f"must be finite, got {given!r}")
+        # every cell's corner must be a number: (x, y) and the far corner within MAX_EXTENT_M (checks.py's bound)
+        reach = max(abs(origin[0]), abs(origin[1])) + self.resolution * max(self.probability.shape)
+        if not reach <= MAX_EXTENT_M:
+            raise InputError("origin", f"{given!r} with {self.probability.shape[1]} x {self.probability.shape[0]} "
+                                       f"cells of {self.resolution:g} m reaches beyond {MAX_EXTENT_M:g} m: a unit "
+                                       "mistake or a corrupt field?")
         self.origin = origin
 
     # --- shape -----------------------------------------------------------------

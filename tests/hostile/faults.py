@@ -1,4 +1,5 @@
-"""Simulated file-system faults for writes under one folder: no space left, permission denied, read-only.
+"""Simulated file-system faults for writes under one folder: no space left, permission denied, read-only,
+and a rival writer ('rival': another process creates the new folder this one is about to rename into place).
 
 Tests run as root, for whom ``chmod`` does not stop a write, and no tiny file system can be
 mounted; so the faults are injected where Python opens files for writing: ``os.open``,
@@ -48,11 +49,38 @@ class _FullDisk:
         return iter(self._f)
 
 
+RIVAL_TEXT = b"the rival writer's bag\n"  # what the rival writes into the folder it creates (metadata.yaml)
+
+
+@contextlib.contextmanager
+def _rival(folder):
+    """Just before a temporary folder under ``folder`` is renamed onto a name that does not exist, a rival makes
+    that name (a bag folder of its own), as a second ``crfmap simulate`` into the same new folder would."""
+    real_replace = os.replace
+
+    def replace(src, dst, *args, **kw):
+        if _under(dst, folder) and Path(src).is_dir() and not os.path.lexists(dst):
+            os.mkdir(dst)
+            Path(dst, "metadata.yaml").write_bytes(RIVAL_TEXT)
+        return real_replace(src, dst, *args, **kw)
+
+    os.replace = replace
+    try:
+        yield
+    finally:
+        os.replace = real_replace
+
+
 @contextlib.contextmanager
 def fault(kind, folder):
-    """Inside the block, writes under ``folder`` fail as ``kind`` ('enospc', 'eacces', 'erofs') says."""
+    """Inside the block, writes under ``folder`` fail as ``kind`` ('enospc', 'eacces', 'erofs') says
+    ('rival': a rival writer creates the new folder first)."""
     if kind is None:
         yield
+        return
+    if kind == "rival":
+        with _rival(Path(folder).resolve()):
+            yield
         return
     folder = Path(folder).resolve()
     code = {"enospc": errno.ENOSPC, "eacces": errno.EACCES, "erofs": errno.EROFS}[kind]

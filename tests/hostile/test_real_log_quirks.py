@@ -109,3 +109,128 @@ def test_concurrent_writers_never_mix_array_and_sidecar(tmp_path):
 def test_fixture_log_builds(tmp_path):
     (tmp_path / "ok.log").write_text(carmen_text())
     assert read_carmen(tmp_path / "ok.log").scans.ranges.shape == (4, 9)
+
+
+# --- the no-return rule (crfmap.io.carmen.no_return_rule) on synthetic logs whose codes vary ---------------
+def _spread_log(tmp_path, codes, n_scans=200, far=30.0, seed=3):
+    """200 scans of 9 beams: real returns spread over 0.5-``far`` m, then the readings ``codes`` put into them."""
+    rng = np.random.default_rng(seed)
+    values = rng.uniform(0.5, far, (n_scans, 9))
+    flat = values.ravel()
+    spots = rng.choice(flat.size, len(codes), replace=False)
+    flat[spots] = codes
+    return _log(tmp_path, [[f"{v:.2f}" for v in row] for row in values]), spots
+
+
+@pytest.mark.parametrize("codes, code", [
+    ([51.05] * 60 + [51.10] * 60, 51.05),  # two codes 5 cm apart
+    ([51.14] * 40 + [51.15] * 40 + [51.16] * 40 + [51.25], 51.14),  # three codes and one stray top value
+    ([51.14] * 40 + [51.16] * 40 + [63.0], 51.14),  # a stray far above the codes
+    ([81.83] * 30 + [81.87] * 30 + [81.91] * 30, 80.0),  # a SICK LMS's codes, at the sensor's real limit
+    ([8.18] * 50 + [8.19] * 50, 8.18),  # a SICK in its 8 m mode
+], ids=["5cm-apart", "stray-top", "stray-far", "sick-80m", "sick-8m"])
+def test_codes_that_vary_are_no_returns_and_real_returns_stay(tmp_path, codes, code):
+    path, spots = _spread_log(tmp_path, codes, far=30.0 if code > 30 else 7.5)
+    rec = read_carmen(path)
+    r = rec.scans.ranges.ravel()
+    assert rec.meta["no_return_code"] == pytest.approx(code) and "guessed" in rec.meta["max_range_source"]
+    assert np.isposinf(r[spots]).all()  # every code (and every stray above them) is a no-return
+    assert np.isfinite(np.delete(r, spots)).all()  # and no real return is lost
+
+
+def test_ninety_genuine_returns_at_the_top_stay_hits(tmp_path):
+    # a small room: the far wall at 3.00 m seen 90 times, the rest spread below it
+    path, spots = _spread_log(tmp_path, [3.00] * 90, n_scans=40, far=2.99)
+    with pytest.warns(UserWarning, match="kept as hits; pass --max-range"):  # said in one line, not taken
+        rec = read_carmen(path)
+    assert rec.meta["no_return_code"] is None and np.isfinite(rec.scans.ranges).all()
+    assert rec.scans.ranges.ravel()[spots].tolist() == [3.0] * 90
+
+
+def test_a_pile_only_as_dense_as_below_is_kept_with_a_warning(tmp_path):
+    # 30 readings at 20.00 m with 20 spread in the half metre below: perhaps codes, perhaps a wall
+    path, spots = _spread_log(tmp_path, [20.0] * 30 + list(np.linspace(19.5, 19.9, 20)), n_scans=40, far=12.0)
+    with pytest.warns(UserWarning, match=r"may be no-return codes.*--max-range 20"):
+        rec = read_carmen(path)
+    assert rec.meta["no_return_code"] is None and np.isfinite(rec.scans.ranges).all()
+
+
+def test_a_clean_log_reads_silently(tmp_path):
+    import warnings
+
+    path, _ = _spread_log(tmp_path, [], n_scans=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rec = read_carmen(path)
+    assert rec.meta["no_return_code"] is None
+
+
+@pytest.mark.parametrize("command", ["build", "convert", "evaluate"])
+def test_every_log_reading_command_takes_max_range(tmp_path, command):
+    from crfmap.cli import build_parser
+
+    outputs = [] if command == "evaluate" else [str(tmp_path / "o.npy")]
+    args = build_parser().parse_args([command, str(tmp_path / "q.log"), *outputs, "--max-range", "12"])
+    assert args.max_range == 12.0
+
+
+def test_evaluate_max_range_reaches_the_reader(tmp_path, capsys):
+    from crfmap.cli import main
+
+    path, _ = _spread_log(tmp_path, [], n_scans=60, far=6.0)
+    heads = []
+    for extra in ([], ["--max-range", "3"]):
+        assert main(["evaluate", str(path), *extra, "--methods", "raw", "--boot", "0"]) == 0
+        heads.append(capsys.readouterr().out.splitlines()[0])
+    assert heads[0] != heads[1]  # readings beyond 3 m no longer end in hits: other cells, another map
+
+
+def test_a_byte_order_mark_does_not_drop_the_first_line(tmp_path):
+    text = "FLASER 9 " + " ".join(["2.50"] * 9) + " 0 0 0 0 0 0 1.0 nohost 1.0\n" + carmen_text()
+    (tmp_path / "bom.log").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert read_carmen(tmp_path / "bom.log", max_range=None).scans.ranges.shape == (5, 9)
+
+
+def _map_writer(path, value, rounds):
+    from crfmap.grid import OccupancyGrid
+    from crfmap.io.map_server import save_map
+
+    for _ in range(rounds):  # the image says `value` (scale mode), the YAML's resolution says it too
+        save_map(OccupancyGrid(np.full((30, 30), value), resolution=value), path, mode="scale")
+
+
+def test_concurrent_writers_never_mix_a_maps_image_and_yaml(tmp_path):
+    from crfmap.io.map_server import load_map
+
+    path = tmp_path / "m.yaml"
+    _map_writer(path, 0.25, 1)
+    ctx = multiprocessing.get_context("fork")
+    writers = [ctx.Process(target=_map_writer, args=(path, v, 80)) for v in (0.25, 0.75)]
+    for w in writers:
+        w.start()
+    mixed = reads = 0
+    while any(w.is_alive() for w in writers) or reads < 50:
+        g = load_map(path)
+        reads += 1
+        mixed += abs(g.resolution - g.probability[0, 0]) > 0.01
+    for w in writers:
+        w.join()
+    g = load_map(path)  # and the final pair is one writer's
+    assert mixed == 0 and reads >= 50 and abs(g.resolution - g.probability[0, 0]) <= 0.01
+    assert not list(tmp_path.glob(".*tmp"))
+
+
+def test_two_simulations_into_one_new_folder_leave_one_whole_bag(tmp_path):
+    import subprocess
+    import sys
+
+    code = "import sys; from crfmap.cli import main; sys.exit(main(sys.argv[1:]))"
+    argv = [sys.executable, "-c", code, "simulate", "x", str(tmp_path / "sim"), "--quiet", "--beams", "8"]
+    runs = [subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    results = [(p.wait(), p.stderr.read()) for p in runs]
+    assert sorted(rc for rc, _ in results) == [0, 2]  # one wrote its bag, the other refused in one line
+    err = next(e for rc, e in results if rc == 2).strip()
+    assert len(err.splitlines()) == 1 and "sim" in err and ("another process" in err or "already exists" in err)
+    from crfmap.io.bag_reader import read_bag
+
+    assert len(read_bag(tmp_path / "sim").scans) > 0 and not list(tmp_path.glob(".*tmp"))

@@ -91,3 +91,45 @@ def test_transforms_keep_the_good_and_report_the_bad():
     good, faults = transforms_of(NS(transforms=[tr("base_link", 1.0), tr("a", 0.0), tr("b", 1.0, x=math.nan)]))
     assert [(t.parent, t.child) for t in good] == [("odom", "base_link")]
     assert [f.kind for f in faults] == ["non-unit quaternion", "transform translation"]
+
+
+def test_a_map_over_the_cell_limit_is_refused_before_any_work(monkeypatch):
+    monkeypatch.setenv("CRFMAP_MAX_CELLS", "5")  # what crfmap --max-cells 5 node ... sets for the run
+    with pytest.raises(BadMessage) as info:
+        occupancy_grid(_grid())  # 3 x 2 = 6 cells
+    assert info.value.kind == "too many cells" and "6 cells" in info.value.reason and "--max-cells" in info.value.reason
+    monkeypatch.setenv("CRFMAP_MAX_CELLS", "6")
+    assert occupancy_grid(_grid()).shape == (2, 3)
+
+
+def test_an_origin_beyond_any_map_is_refused():
+    with pytest.raises(BadMessage) as info:
+        occupancy_grid(_grid(origin=(1e300, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)))
+    assert info.value.kind == "geometry"
+
+
+def test_the_refine_node_logs_an_oversized_map_once_and_stays_up(monkeypatch):
+    from crfmap.ros.node import RefineNode
+
+    monkeypatch.setenv("CRFMAP_MAX_CELLS", "5")
+    lines, sent = [], []
+    node = RefineNode(period=0.0, refine=lambda g: g, log=lines.append)
+    node.publishers["output"] = sent.append
+    for _ in range(3):  # three oversized maps: skipped, one log line
+        node.on_grid(_native(_grid()))
+        node.step(0.0)
+    monkeypatch.setenv("CRFMAP_MAX_CELLS", "6")
+    node.on_grid(_native(_grid()))
+    node.step(0.0)  # the node is still up: the next map that fits is refined and published
+    assert len(sent) == 1 and sum("too many cells" in line for line in lines) == 1
+    assert "3 on /map (too many cells)" in node.summary()
+
+
+def _native(m):
+    """A ROS 2 style message object of a GridMessage."""
+    x, y, z, qx, qy, qz, qw = m.origin
+    stamp = NS(sec=0, nanosec=m.stamp_ns)
+    return NS(header=NS(stamp=stamp, frame_id=m.frame_id),
+              info=NS(map_load_time=stamp, resolution=m.resolution, width=m.width, height=m.height,
+                      origin=NS(position=NS(x=x, y=y, z=z), orientation=NS(x=qx, y=qy, z=qz, w=qw))),
+              data=m.data.tolist())

@@ -21,6 +21,9 @@ def add_parser(sub):
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
+    p.add_argument("--max-range", type=float, default=None, metavar="M",
+                   help="CARMEN logs: the laser's maximum range; readings at or beyond it are no-returns "
+                        "(default: the log's PARAM robot_front_laser_max, else crfmap.io.carmen.no_return_rule)")
     p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
                    help="the preset to score (default: crfmap.crf.presets.DEFAULT_PRESET, certainty)")
     p.add_argument("--methods", default="all", help="comma-separated rows to score (default all: raw, logodds, "
@@ -69,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     except InputError as e:
         raise InputError("--preset", e.problem) from None
     methods = _methods(args.methods, args.preset)
-    rec = load_recording(args.input)
+    rec = load_recording(args.input, max_range=args.max_range)
     split = scan_split(rec.scans, args.resolution, parity=args.parity)
     scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed, methods=methods,
                      keep_beliefs=True)

@@ -19,6 +19,22 @@ def written_files(output) -> list[Path]:
     return [out]
 
 
+def named_files(item) -> list[Path]:
+    """The files an input names besides itself: a map YAML's ``image:`` (as the loader resolves it).
+
+    A YAML that cannot be read names nothing here (loading it fails with its own error line).
+    """
+    item = Path(item)
+    if item.suffix.lower() not in (".yaml", ".yml") or item.name.lower().endswith(".npy.yaml"):
+        return []
+    from crfmap.io.map_server import read_map_yaml
+
+    try:
+        return [Path(read_map_yaml(item)["image_path"])]
+    except (InputError, OSError, RecursionError):
+        return []
+
+
 def _same(a: Path, b: Path) -> bool:
     try:
         return a.exists() and b.exists() and os.path.samefile(a, b)
@@ -27,7 +43,8 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def check_output(inputs, output, force=False, option="--force"):
-    """InputError naming ``output`` if writing it would replace one of ``inputs`` (or the files they name).
+    """InputError naming ``output`` if writing it would replace one of ``inputs`` or a file they name (a map
+    YAML's image, whatever its name: ``image: out.pgm`` in ``in.yaml`` is an input of ``infer in.yaml out.yaml``).
 
     ``force`` allows it (a deliberate in-place update); the write stays atomic either way.
     """
@@ -38,6 +55,7 @@ def check_output(inputs, output, force=False, option="--force"):
         item = Path(item)
         if item.suffix.lower() in (".yaml", ".yml") and not item.name.lower().endswith(".npy.yaml"):
             in_files += [item.with_suffix(s) for s in MAP_IMAGE_SUFFIXES]
+        in_files += named_files(item)
     for o in out_files:
         for i in in_files:
             if o == i or _same(o, i) or Path(os.path.abspath(o)) == Path(os.path.abspath(i)):

@@ -183,9 +183,11 @@ def atomic_dir(path):
     """Like :func:`atomic_path` for a folder (a ROS2 bag is a folder).
 
     An existing ``path`` is replaced only if it is empty or a ROS 2 bag: never a folder of
-    the user's other files.
+    the user's other files. A ``path`` that did not exist at the start and exists at the rename
+    (another writer's) is never replaced: FileExistsError naming it.
     """
     path = Path(path)
+    existed = path.exists() or path.is_symlink()
     if path.exists() and not (path.is_dir() and (is_bag_folder(path) or not any(path.iterdir()))):
         raise FileExistsError(17, "exists and is not a ROS 2 bag folder (or empty); not replacing it", str(path))
     with signals_raise():
@@ -199,15 +201,21 @@ def atomic_dir(path):
             tmp = box / path.name
             yield tmp
             _set_new_file_mode(tmp, path, folder=True)
-            if path.exists():
-                os.replace(path, box / ".old")  # moved aside first: a failed rename then puts it back
-                try:
+            # The check and the rename are one step under the parent's lock: of two writers of one new
+            # folder, the second finds the first's and refuses instead of replacing it.
+            with unit_lock(path.parent, exclusive=True):
+                if not existed and (path.exists() or path.is_symlink()):
+                    raise FileExistsError(17, "was created by another process while this one was writing it; "
+                                              "not replacing it", str(path))
+                if path.exists():
+                    os.replace(path, box / ".old")  # moved aside first: a failed rename then puts it back
+                    try:
+                        os.replace(tmp, path)
+                    except BaseException:
+                        os.replace(box / ".old", path)
+                        raise
+                else:
                     os.replace(tmp, path)
-                except BaseException:
-                    os.replace(box / ".old", path)
-                    raise
-            else:
-                os.replace(tmp, path)
         except BaseException as exc:
             named = _named(exc, path)
             if named is not None:

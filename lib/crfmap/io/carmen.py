@@ -22,12 +22,12 @@ maximum range, and not as one exact number: 81.83 m in Intel, 50.00 m in ACES, a
 81.87, 81.89 and 81.91 m mixed in one file in other public logs. Readings at or beyond
 the laser's maximum range become ``+inf`` (REP 117 "no return"), never hits. The
 maximum range is, in this order: the ``max_range`` argument (``crfmap build --max-range``);
-the log's ``PARAM robot_front_laser_max``; else (:func:`guess_max_range`) the SICK LMS
-limit :data:`SICK_NO_RETURN` (80 m: a SICK LMS 2xx measures at most 80 m, so 81.83-81.91
-are codes) for readings beyond it, and the file's largest reading only if it is a spike
-(a code: at least :data:`SPIKE_MIN_COUNT` readings exactly there, and
-:data:`SPIKE_RATIO` times more than in the half metre below it, where a real wall's
-readings would spread). A log whose longest reading is a real wall keeps it as a hit.
+the log's ``PARAM robot_front_laser_max``; else what :func:`no_return_rule` finds in the readings
+(the one rule, with its reason in ``meta["max_range_source"]``): beyond 80 m (a SICK LMS's limit)
+every reading is a code; else a pile of readings within a few cm of each other at the top, far
+denser than the half metre below it, is a set of codes (a stray value above them too). A pile that
+looks like codes but is not taken is said in one warning naming ``--max-range``.
+A log whose longest reading is a real wall keeps it as a hit.
 """
 from __future__ import annotations
 
@@ -36,6 +36,7 @@ import math
 import warnings
 import zlib
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +50,10 @@ SICK_NO_RETURN = 80.0  # [m] a SICK LMS 2xx measures at most 80 m; readings beyo
 SPIKE_MIN_COUNT = 10  # readings exactly at the file's maximum before it may be a no-return code ...
 SPIKE_RATIO = 3.0  # ... and this many times more than in the SPIKE_BAND below it
 SPIKE_BAND = 0.5  # [m]
+CODE_GAP = 0.06  # [m] codes of one log lie within a few cm of each other (51.05 and 51.10; 51.14-51.16) ...
+CODE_SPREAD = 0.25  # [m] ... and within this of the top (81.83-81.91 in one SICK log)
+CODE_STRAYS = 3  # readings above the codes set aside as strays (one 51.25 above codes at 51.14-51.16)
+MIN_CODE_RANGE = 4.0  # [m] no scanning laser of these logs stops short of this (Hokuyo URG: 4-5.6 m; SICK 8-80 m)
 MAX_LOG_BYTES = 256 << 20  # [bytes] of (decompressed) log text: Intel's is 6 MB; more is a gzip bomb or not a log
 _CHUNK = 8 << 20  # [bytes] read at a time, so that binary content is refused early
 MAX_BEAMS = 100_000  # readings per FLASER line
@@ -80,7 +85,7 @@ def _read_text(path: Path) -> str:
         raise InputError(path, f"corrupt gzip data ({exc})") from None
     raw = b"".join(chunks)
     try:
-        return raw.decode("utf-8")
+        return raw.decode("utf-8-sig")  # a byte-order mark (Windows editors) is not part of the first line
     except UnicodeDecodeError as exc:
         raise InputError(path, f"not a text CARMEN log (byte {exc.start} is not UTF-8)") from None
 
@@ -101,25 +106,92 @@ def _parse_rows(path, rows, line_numbers, width, what):
     return values.reshape(len(rows), width)
 
 
-def guess_max_range(ranges: np.ndarray):
-    """The maximum range [m] implied by the readings of a log without ``PARAM robot_front_laser_max``, or None.
+@dataclass(frozen=True)
+class MaxRangeGuess:
+    """What the readings of a log say about its laser's maximum range (:func:`no_return_rule`).
 
-    Readings beyond :data:`SICK_NO_RETURN` (80 m) are codes whatever their exact value; else
-    the file's largest reading is the maximum only if it is a spike (see the module notes).
+    ``max_range`` [m]: readings at or beyond it are no-return codes (None: every reading is a hit);
+    ``reason``: why, in words; ``warning``: a one-line warning naming ``--max-range`` when the readings
+    look like codes the rule did not take (or None).
+    """
+
+    max_range: float | None
+    reason: str
+    warning: str | None = None
+
+
+def _code_cluster(finite):
+    """(lowest value, count) of the readings at the top of ``finite`` that lie together as codes do.
+
+    The top is the largest reading once up to :data:`CODE_STRAYS` stray readings above are set aside;
+    the cluster reaches down from it through readings no more than :data:`CODE_GAP` apart, at most
+    :data:`CODE_SPREAD` below the top (a real wall's readings spread further and without such gaps).
+    """
+    top_k = np.sort(np.partition(finite, max(finite.size - 1 - CODE_STRAYS, 0))[-(CODE_STRAYS + 1):])
+    top = float(top_k[0])  # the (CODE_STRAYS + 1)-th largest reading
+    near = np.unique(finite[(finite >= top - CODE_SPREAD) & (finite <= top)])[::-1]
+    low = top
+    for value in near[1:]:
+        if low - value > CODE_GAP:
+            break
+        low = float(value)
+    return low, int(np.count_nonzero(finite >= low - NO_RETURN_TOLERANCE))
+
+
+def no_return_rule(ranges) -> MaxRangeGuess:
+    """The maximum range [m] a log's readings imply (no ``PARAM robot_front_laser_max``, no ``--max-range``).
+
+    The one rule every CARMEN reader uses, with its reason:
+
+    - readings beyond :data:`SICK_NO_RETURN` (80 m, a SICK LMS's limit) are codes whatever their value;
+    - else the readings at the top (up to :data:`CODE_STRAYS` strays set aside) that lie within a few cm of
+      each other (gaps up to :data:`CODE_GAP`, spread up to :data:`CODE_SPREAD`) are codes if they are many
+      (:data:`SPIKE_MIN_COUNT`), :data:`SPIKE_RATIO` times more than the readings in the :data:`SPIKE_BAND`
+      below them (where a real wall's readings would spread), and at least :data:`MIN_CODE_RANGE` away (no
+      scanning laser of these logs has a shorter maximum range); the maximum range is their lowest value,
+      so every code and stray above it is a no-return;
+    - such a pile below :data:`MIN_CODE_RANGE`, or one only as dense as what lies below it, is kept as hits
+      with a warning naming ``--max-range``; anything else is hits, silently.
 
     >>> r = np.r_[np.linspace(1, 49.9, 500), np.full(40, 50.0)]
-    >>> guess_max_range(r), guess_max_range(np.linspace(1, 12, 500)), guess_max_range(np.r_[r, 81.87, 81.91])
-    (50.0, None, 80.0)
+    >>> no_return_rule(r).max_range, no_return_rule(np.linspace(1, 12, 500)).max_range
+    (50.0, None)
+    >>> no_return_rule(np.r_[r, 81.87, 81.91]).max_range
+    80.0
+    >>> codes = np.r_[np.linspace(1, 30, 500), np.full(20, 51.05), np.full(20, 51.10), 51.25]
+    >>> no_return_rule(codes).max_range
+    51.05
     """
-    finite = ranges[np.isfinite(ranges)]
+    finite = np.asarray(ranges, dtype=np.float64).ravel()
+    finite = finite[np.isfinite(finite)]
     if finite.size == 0:
-        return None
+        return MaxRangeGuess(None, "no finite readings")
     if finite.max() >= SICK_NO_RETURN:
-        return SICK_NO_RETURN
-    largest = float(finite.max())
-    at_max = np.count_nonzero(finite >= largest - NO_RETURN_TOLERANCE)
-    below = np.count_nonzero((finite >= largest - SPIKE_BAND) & (finite < largest - NO_RETURN_TOLERANCE))
-    return largest if at_max >= SPIKE_MIN_COUNT and at_max >= SPIKE_RATIO * below else None
+        return MaxRangeGuess(SICK_NO_RETURN, f"readings beyond {SICK_NO_RETURN:g} m, a SICK LMS's limit, are codes")
+    low, n_code = _code_cluster(finite)
+    n_below = int(np.count_nonzero((finite >= low - SPIKE_BAND) & (finite < low - NO_RETURN_TOLERANCE)))
+    top = float(finite.max())
+    at = f"{low:g} m" if top - low < NO_RETURN_TOLERANCE else f"{low:g}-{top:g} m"
+    pile = f"{n_code} readings at {at} against {n_below} in the {SPIKE_BAND:g} m below"
+    if n_code >= SPIKE_MIN_COUNT and n_code >= SPIKE_RATIO * n_below:
+        if low >= MIN_CODE_RANGE:
+            return MaxRangeGuess(low, f"no-return codes: {pile}")
+        return MaxRangeGuess(None, f"kept as hits: {pile}, but below {MIN_CODE_RANGE:g} m",
+                             f"{pile} look like no-return codes, kept as hits (below {MIN_CODE_RANGE:g} m); "
+                             f"pass --max-range {low:g} if they are")
+    if n_code >= SPIKE_MIN_COUNT and n_code >= n_below:
+        return MaxRangeGuess(None, f"kept as hits: {pile}",
+                             f"{pile} may be no-return codes, kept as hits; pass --max-range {low:g} if they are")
+    return MaxRangeGuess(None, "none found (every reading is a hit)")
+
+
+def guess_max_range(ranges: np.ndarray):
+    """The maximum range [m] :func:`no_return_rule` finds in ``ranges``, or None (kept for older callers).
+
+    >>> guess_max_range(np.r_[np.linspace(1, 49.9, 500), np.full(40, 50.0)])
+    50.0
+    """
+    return no_return_rule(ranges).max_range
 
 
 def _max_range(ranges, params, path, max_range, no_return):
@@ -141,8 +213,11 @@ def _max_range(ranges, params, path, max_range, no_return):
             if not (math.isfinite(value) and value > 0):
                 raise InputError(path, f"PARAM robot_front_laser_max {text!r} is not a positive range in metres")
             return value, "PARAM robot_front_laser_max"
-        guess = guess_max_range(ranges)
-        return guess, ("guessed from the readings" if guess is not None else "none found (every reading is a hit)")
+        guess = no_return_rule(ranges)
+        if guess.warning is not None:
+            warnings.warn(f"{path.name}: {guess.warning}", stacklevel=3)
+        return guess.max_range, (f"guessed from the readings ({guess.reason})" if guess.max_range is not None
+                                 else guess.reason)
     if isinstance(max_range, bool) or not isinstance(max_range, (int, float, np.integer, np.floating)):
         raise InputError(name, f"expected 'auto', a range in metres or None, got {max_range!r}")
     value = float(max_range)

@@ -30,11 +30,11 @@ from PIL import Image
 
 from crfmap.io._yaml import finite_number, format_number, read_mapping
 from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
-from crfmap.io.atomic import atomic_path
+from crfmap.io.atomic import atomic_paths, unit_lock
 from crfmap.io.image_guard import check_map_image
-from crfmap.checks import check_path_arg
+from crfmap.checks import check_grid_geometry, check_path_arg
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid
+from crfmap.grid import OccupancyGrid, check_probability_array
 from crfmap.io.nav2_loader import DEFAULT_LOADER, LOADERS, occupancy, read_pixels
 
 MAP_MODES = ("trinary", "scale", "raw")
@@ -144,6 +144,15 @@ def _check_image_header(image_path, source, context):
     _check_pnm_header(image_path, source, context)
 
 
+def _optional_thresh(name, value):
+    """A threshold argument: None (the file's) or a number in [0, 1]; InputError naming ``name`` otherwise."""
+    if value is None:
+        return None
+    from crfmap.checks import check_number
+
+    return check_number(name, value, low=0.0, high=1.0)
+
+
 def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAULT_LOADER) -> OccupancyGrid:
     """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
 
@@ -174,13 +183,18 @@ def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAUL
     """
     if loader not in LOADERS:
         raise InputError("--loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
-    params = read_map_yaml(yaml_path)
-    occ_t = params["occupied_thresh"] if occupied_thresh is None else float(occupied_thresh)
-    free_t = params["free_thresh"] if free_thresh is None else float(free_thresh)
+    occ_t = _optional_thresh("occupied_thresh", occupied_thresh)
+    free_t = _optional_thresh("free_thresh", free_thresh)
+    path = check_path_arg(yaml_path, "map YAML file name")
+    with unit_lock(path.parent, exclusive=False):  # the YAML and the image of one save_map
+        params = read_map_yaml(path)
+        pixels = read_pixels(params["image_path"], f" (the image of {path})", _check_image_header)
+    occ_t = params["occupied_thresh"] if occ_t is None else occ_t
+    free_t = params["free_thresh"] if free_t is None else free_t
     if occupied_thresh is not None or free_thresh is not None:
         _check_thresholds(occ_t, free_t, "load_map thresholds")
-    pixels = read_pixels(params["image_path"], f" (the image of {Path(yaml_path)})", _check_image_header)
     values = occupancy(pixels, params["mode"], params["negate"], occ_t, free_t, loader=loader)
+    check_grid_geometry(path, params["resolution"], params["origin"], values.shape[1], values.shape[0])
     meta = dict(params["extra"])
     meta.update({key: params[key] for key in ("image", "mode", "negate", "occupied_thresh", "free_thresh")})
     meta.update(source=str(yaml_path), image_path=str(params["image_path"]), loader=loader)
@@ -279,8 +293,8 @@ def _resolve_save_options(grid, mode, occupied_thresh, free_thresh, image_format
         default_occ, default_free = meta["occupied_thresh"], meta["free_thresh"]
     else:
         default_occ, default_free = OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT
-    occ = float(default_occ if occupied_thresh is None else occupied_thresh)
-    free = float(default_free if free_thresh is None else free_thresh)
+    occ = float(default_occ) if occupied_thresh is None else _optional_thresh("occupied_thresh", occupied_thresh)
+    free = float(default_free) if free_thresh is None else _optional_thresh("free_thresh", free_thresh)
     _check_thresholds(occ, free, "save_map thresholds")
     if image_format is None:
         old = Path(str(meta.get("image", ""))).suffix.lower().lstrip(".")
@@ -327,6 +341,7 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
         raise InputError(yaml_path, "a map_server map file must end in .yaml or .yml")
     if not isinstance(grid, OccupancyGrid):
         raise InputError(yaml_path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
+    check_probability_array(grid.probability, yaml_path)  # changed in place since it was made? (NaN, > 1)
     mode, occ, free, image_format = _resolve_save_options(grid, mode, occupied_thresh, free_thresh,
                                                           image_format)
     image_path = yaml_path.with_suffix("." + image_format)
@@ -336,16 +351,11 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
     yaml_occ, yaml_free = (OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT) if (
         saver == "jazzy" and mode == "trinary") else (occ, free)
     text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, yaml_occ, yaml_free)
-    image_existed = image_path.exists()
-    with atomic_path(image_path) as tmp:
-        _write_image(tmp, grey, alpha, image_format)
-    try:
-        with atomic_path(yaml_path) as tmp:
-            _write_text(tmp, text)
-    except BaseException:
-        if not image_existed:  # leave no half a map behind
-            image_path.unlink(missing_ok=True)
-        raise
+    # One unit (crfmap.io.atomic.atomic_paths): both temporaries are written, then renamed together under
+    # the folder's lock, so concurrent writers leave one writer's image with that writer's YAML.
+    with atomic_paths(image_path, yaml_path) as (tmp_image, tmp_yaml):
+        _write_image(tmp_image, grey, alpha, image_format)
+        _write_text(tmp_yaml, text)
     return yaml_path, image_path
 
 

@@ -50,6 +50,7 @@ def save_npy(grid: OccupancyGrid, path) -> Path:
         raise InputError(path, "an .npy grid file must end in .npy")
     if not isinstance(grid, OccupancyGrid):
         raise InputError(path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
+    check_probability_array(grid.probability, path)  # changed in place since it was made? (NaN, > 1)
     sidecar = npy_sidecar_path(path)
     text = (f"# crfmap grid metadata for {path.name}: P(occupied) as float [y, x], row 0 = lowest y\n"
             f"resolution: {format_number(grid.resolution)}\n"

@@ -254,8 +254,11 @@ class HitCounter:
         if r.shape != (len(self.angles),) or not np.issubdtype(r.dtype, np.floating):
             raise InputError("ranges", f"expected {len(self.angles)} floating-point readings, got shape {r.shape} "
                              f"dtype {r.dtype}")
-        pose = np.asarray(laser_pose, dtype=np.float64).ravel()
-        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+        try:  # a string, a (3, 1) column or a ragged list is no pose: refused, not reshaped
+            pose = np.asarray(laser_pose, dtype=np.float64)
+        except (TypeError, ValueError):
+            pose = None
+        if pose is None or pose.shape != (3,) or not np.all(np.isfinite(pose)):
             raise InputError("laser_pose", f"expected finite (x, y, yaw), got {laser_pose!r}")
         u = (pose[0] - self.origin[0]) / self.resolution
         v = (pose[1] - self.origin[1]) / self.resolution

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from crfmap.checks import check_number
 from crfmap.crf.engine.incremental import IncrementalLBP
 from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.inference.result import LBPResult
@@ -95,12 +96,10 @@ class OnlineMapper:
         self.hidden = check_table(hidden, "hidden")
         self.link = check_table(link, "link")
         self.pairing = check_pairing(pairing)
-        if not (np.isfinite(radius) and radius > 0):
-            raise InputError("radius", f"must be a positive number of metres, got {radius!r}")
+        check_number("radius", radius, low=0.0, low_open=True)
         if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
             raise InputError("max_iter", f"must be a positive integer, got {max_iter!r}")
-        if not (np.isfinite(tol) and tol >= 0):
-            raise InputError("tol", f"must be a non-negative number, got {tol!r}")
+        check_number("tol", tol, low=0.0)
         self.lbp = IncrementalLBP(hits.height, hits.width, self.hidden, self.link, dtype, self.pairing, margin)
         self.hits = hits
         self.radius = float(radius)

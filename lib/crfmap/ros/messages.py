@@ -160,9 +160,15 @@ def occupancy_grid(msg: GridMessage):
     """The :class:`~crfmap.grid.OccupancyGrid` of a grid message (values v -> v / 100, -1 -> 0.5), or BadMessage."""
     from crfmap.io.map_server import grid_from_values
 
+    from crfmap.checks import check_cells
+
     width, height, n = int(msg.width), int(msg.height), int(msg.data.size)
     if n != width * height or n == 0:
         raise BadMessage("data length", f"{n} cells for a {width} x {height} grid (width * height = {width * height})")
+    try:  # what crfmap infer refuses (crfmap --max-cells N, CRFMAP_MAX_CELLS), refused before any work
+        check_cells("map", width, height)
+    except InputError as exc:
+        raise BadMessage("too many cells", exc.problem) from None
     resolution = float(str(np.float32(msg.resolution)))  # undo float32: 0.05, not 0.0500000007 (as bag_reader)
     if not (math.isfinite(resolution) and resolution > 0):
         raise BadMessage("resolution", f"{msg.resolution!r} is not a positive number of metres")
@@ -180,7 +186,10 @@ def occupancy_grid(msg: GridMessage):
     if bad.any():
         raise BadMessage("values", f"{int(bad.sum())} cell(s) outside -1 and 0..100")
     # 50 stays a known 50, as when crfmap reads a bag's /map (crfmap.io.map_server.grid_from_values)
-    return grid_from_values(data, resolution=resolution, origin=(x, y, yaw), frame_id=msg.frame_id or "map")
+    try:
+        return grid_from_values(data, resolution=resolution, origin=(x, y, yaw), frame_id=msg.frame_id or "map")
+    except InputError as exc:  # e.g. an origin 1e300 m away: no map
+        raise BadMessage("geometry", exc.problem) from None
 
 
 def grid_out(grid, stamp_ns_, frame_id) -> GridMessage:

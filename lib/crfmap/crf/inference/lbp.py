@@ -27,6 +27,7 @@ from __future__ import annotations
 import time
 import numpy as np
 
+from crfmap.checks import check_number
 from crfmap.crf.engine import solve as engine
 from crfmap.crf.engine.messages import MESSAGE_FLOOR, check_messages
 from crfmap.crf.engine.packed import PASS_ITERATIONS, fast_tables_ok
@@ -45,7 +46,7 @@ from crfmap.crf.model.potentials import (
     message_coefficients,
 )
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid, as_grid
+from crfmap.grid import OccupancyGrid, as_grid, check_probability_array
 
 
 def message(table, sender_p) -> float:
@@ -65,6 +66,21 @@ def message(table, sender_p) -> float:
 
 
 _BARE_GRID = OccupancyGrid(np.zeros((1, 1)))  # default metadata, for arrays checked while packed
+
+
+def check_float_dtype(dtype) -> np.dtype:
+    """``dtype`` as np.float32 or np.float64; InputError naming ``dtype`` for anything else (None, 'abc', int).
+
+    >>> check_float_dtype("float32")
+    dtype('float32')
+    """
+    try:
+        checked = np.dtype(dtype) if dtype is not None else None
+    except (TypeError, ValueError):
+        checked = None
+    if checked is None or checked not in (np.dtype(np.float32), np.dtype(np.float64)):  # (dtype == None is True)
+        raise InputError("dtype", f"must be np.float32 or np.float64, got {dtype!r}")
+    return checked
 
 
 def infer(
@@ -125,17 +141,16 @@ def infer(
     >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
     (True, True)
     """
+    if isinstance(grid, np.ma.MaskedArray):  # the fused path reads the data under the mask: refuse masked cells
+        grid = check_probability_array(grid, "grid")
     settings = schedule_settings(schedule)
     hidden = check_table(hidden, "hidden")
     link = check_table(link, "link")
     pairing = check_pairing(pairing)
-    dtype = np.dtype(dtype)
-    if dtype not in (np.dtype(np.float32), np.dtype(np.float64)):
-        raise InputError("dtype", f"must be float32 or float64, got {dtype}")
-    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 0):
+    dtype = check_float_dtype(dtype)
+    if isinstance(max_iter, (bool, np.bool_)) or not (isinstance(max_iter, (int, np.integer)) and max_iter >= 0):
         raise InputError("max_iter", f"must be a non-negative integer, got {max_iter!r}")
-    if not (np.isfinite(tol) and tol >= 0):
-        raise InputError("tol", f"must be a non-negative number, got {tol!r}")
+    tol = check_number("tol", tol, low=0.0)
     freeze = getattr(settings, "freeze", None)
     if freeze is not None and not (freeze < tol or freeze == 0):
         raise InputError("freeze", f"must be None or a number in [0, tol), got {freeze!r}")

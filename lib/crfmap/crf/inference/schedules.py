@@ -38,7 +38,9 @@ CORNERS = ("lower-left", "lower-right", "upper-left", "upper-right")
 
 
 def _check_damping(damping):
-    if not (np.isfinite(damping) and 0.0 <= damping < 1.0):
+    from crfmap.checks import check_number
+
+    if check_number("damping", damping, low=0.0, high=1.0) == 1.0:
         raise InputError("damping", f"must be in [0, 1), got {damping!r}")
 
 

@@ -1,0 +1,157 @@
+"""The catalogue, continued: what a hostile-input and fault campaign found (issue 40), one class per kind.
+
+- ``misread``: a command that would replace its input through a file the input names (a map YAML's
+  ``image:``), grids whose cells are not what they say (a masked array, NaN written in after the grid
+  was made) -- refused, not silently read or written;
+- ``concurrency``: a second writer of the same new bag folder (the ``rival`` fault): refused, the
+  first writer's folder intact;
+- ``unbounded``: the live node's map over the CLI's cell limit (refused, logged once);
+- ``api``: library calls with arguments of the wrong kind: one InputError naming the argument.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from cases import CASES, Case, case, cli
+from fixtures import GOOD_YAML, carmen_log, good_grid, good_npy
+
+
+# --- misread: data lost or misread ------------------------------------------------------------------
+def _input_names_output_image(image):
+    def setup(d):
+        (Path(d) / image).write_bytes(b"P5\n8 6\n255\n" + bytes([254]) * 48)  # the input's image ...
+        (Path(d) / "in.yaml").write_text(GOOD_YAML.replace("img.pgm", image))
+        return cli("infer", Path(d) / "in.yaml", Path(d) / "out.yaml", names=["out.yaml"])  # ... is out.yaml's
+    return setup
+
+
+CASES.append(Case("misread", "infer-input-image-is-the-output-pgm", _input_names_output_image("out.pgm")))
+CASES.append(Case("misread", "infer-input-image-is-the-output-png", _input_names_output_image("out.png")))
+
+
+@case("misread", "infer-input-image-by-absolute-path-is-the-output")
+def _(d):
+    (Path(d) / "out.pgm").write_bytes(b"P5\n8 6\n255\n" + bytes([254]) * 48)
+    (Path(d) / "in.yaml").write_text(GOOD_YAML.replace("img.pgm", str(Path(d) / "out.pgm")))
+    return cli("infer", Path(d) / "in.yaml", Path(d) / "out.yaml", names=["out.yaml"])
+
+
+def _grid_call(name, call, names):
+    def setup(d):
+        return dict(call=lambda: call(Path(d)), names=names)
+    CASES.append(Case("misread", name, setup))
+
+
+def _masked(d, fully):
+    from crfmap.crf import infer
+
+    values = np.ma.masked_all((4, 5)) if fully else np.ma.masked_greater(np.full((4, 5), 0.5), 0.4)
+    infer(values)
+
+
+def _nan_written_in(d, name):
+    from crfmap.io.grid_files import save_grid
+
+    grid = good_grid()
+    grid.probability[2, 3] = np.nan  # after the grid was checked
+    save_grid(grid, d / name)
+
+
+_grid_call("infer-fully-masked-array", lambda d: _masked(d, True), ["grid"])
+_grid_call("infer-masked-array", lambda d: _masked(d, False), ["grid"])
+_grid_call("save-npy-nan-written-in", lambda d: _nan_written_in(d, "o.npy"), ["o.npy"])
+_grid_call("save-map-nan-written-in", lambda d: _nan_written_in(d, "o.yaml"), ["o.yaml"])
+
+
+# --- concurrency: a rival writer of the same new bag folder ------------------------------------------
+@case("concurrency", "simulate-into-a-folder-a-rival-creates", fault="rival")
+def _(d):
+    return dict(cli("simulate", "x", Path(d) / "sim", "--quiet", "--beams", "8", names=["sim"]), rival="sim")
+
+
+@case("concurrency", "convert-into-a-bag-folder-a-rival-creates", fault="rival")
+def _(d):
+    return dict(cli("convert", carmen_log(d), Path(d) / "out", names=["out"]), rival="out")
+
+
+# --- unbounded: the live node refuses what the command line refuses -----------------------------------
+@case("unbounded", "node-map-over-max-cells")
+def _(d):
+    def call():
+        from types import SimpleNamespace as NS
+
+        from crfmap.errors import InputError
+        from crfmap.ros.messages import BadMessage, grid_message, occupancy_grid
+
+        stamp = NS(sec=1, nanosec=0)
+        native = NS(header=NS(stamp=stamp, frame_id="map"),  # a 10001 x 10001 map, one byte a cell
+                    info=NS(map_load_time=stamp, resolution=0.05, width=10001, height=10001,
+                            origin=NS(position=NS(x=0.0, y=0.0, z=0.0), orientation=NS(x=0.0, y=0.0, z=0.0, w=1.0))),
+                    data=bytes(10001 * 10001))
+        try:
+            occupancy_grid(grid_message(native))
+        except BadMessage as exc:  # what the node logs (once) before it goes on
+            raise InputError("/map", f"{exc.reason} [{exc.kind}]") from None
+    return dict(call=call, names=["/map"], env={"CRFMAP_MAX_CELLS": None})
+
+
+# --- api: library calls with arguments of the wrong kind -----------------------------------------------
+def _api(name, call, names, prep=None):
+    def setup(d):
+        made = prep(Path(d)) if prep else None
+        return dict(call=lambda: call(Path(d), made), names=names)
+    CASES.append(Case("api", name, setup))
+
+
+def _infer(**kw):
+    from crfmap.crf import infer
+
+    return infer(np.full((4, 4), 0.5), **kw)
+
+
+def _imp(module, attr):
+    import importlib
+
+    return getattr(importlib.import_module(module), attr)
+
+
+def _mapper():
+    from crfmap.mapping import OnlineMapper
+
+    return OnlineMapper.for_sensor((0.0, 0.0, 4.0, 4.0), 0.1, -1.0, 0.5, 5, 0.1, 3.0)
+
+
+_api("infer-tol-text", lambda d, m: _infer(tol="abc"), ["tol"])
+_api("infer-tol-None", lambda d, m: _infer(tol=None), ["tol"])
+_api("infer-dtype-text", lambda d, m: _infer(dtype="abc"), ["dtype"])
+_api("infer-dtype-None", lambda d, m: _infer(dtype=None), ["dtype"])
+_api("infer-dtype-int", lambda d, m: _infer(dtype=np.int32), ["dtype"])
+_api("infer-max-iter-True", lambda d, m: _infer(max_iter=True), ["max_iter"])
+_api("flooding-damping-text", lambda d, m: _imp("crfmap.crf.inference.schedules", "Flooding")(damping="0.5"),
+     ["damping"])
+_api("load-map-occupied-thresh-2", lambda d, m: _imp("crfmap.io.map_server", "load_map")(m, occupied_thresh=2.0),
+     ["occupied_thresh"], prep=lambda d: good_npy(d) and _good_map(d))
+_api("load-map-free-thresh-text", lambda d, m: _imp("crfmap.io.map_server", "load_map")(m, free_thresh="low"),
+     ["free_thresh"], prep=lambda d: _good_map(d))
+_api("save-map-occupied-thresh-text",
+     lambda d, m: _imp("crfmap.io.map_server", "save_map")(good_grid(), d / "o.yaml", occupied_thresh="x"),
+     ["occupied_thresh"])
+_api("grid-origin-1.7e308", lambda d, m: _imp("crfmap.grid", "OccupancyGrid")(np.full((2, 2), 0.5), 0.05,
+                                                                             origin=(1.7e308, 0.0, 0.0)), ["origin"])
+_api("grid-origin-text", lambda d, m: _imp("crfmap.grid", "OccupancyGrid")(np.full((2, 2), 0.5), 0.05,
+                                                                          origin="abc"), ["origin"])
+_api("grid-resolution-True", lambda d, m: _imp("crfmap.grid", "OccupancyGrid")(np.full((2, 2), 0.5), True),
+     ["resolution"])
+_api("online-integrate-pose-text", lambda d, m: _mapper().integrate(np.ones(5, np.float32), "abc"), ["laser_pose"])
+_api("online-integrate-pose-column", lambda d, m: _mapper().integrate(np.ones(5, np.float32), np.ones((3, 1))),
+     ["laser_pose"])
+_api("online-mapper-tol-text", lambda d, m: _imp("crfmap.mapping", "OnlineMapper").for_sensor(
+    (0.0, 0.0, 4.0, 4.0), 0.1, -1.0, 0.5, 5, 0.1, 3.0, tol="abc"), ["tol"])
+
+
+def _good_map(d):
+    from fixtures import good_map
+
+    return good_map(d)
