@@ -51,7 +51,8 @@ def test_evaluate_methods_select_rows_and_peers_are_in_the_json(tmp_path, capsys
     assert "| thesis |" not in out and "peer wall time: octomap" in out
     assert main(["evaluate", *common, "--methods", "octomap,hilbert", "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
-    assert set(got) == {"raw", "octomap", "hilbert", "_seconds", "_ece"}
+    assert set(got) == {"raw", "octomap", "hilbert", "_seconds", "_ece", "_nav"}
+    assert set(got["_nav"]) == {"raw", "octomap", "hilbert"}
     assert got["octomap"]["all"]["brier_ci"][0] <= got["octomap"]["all"]["brier"] <= got["octomap"]["all"]["brier_ci"][1]
     assert 0 <= got["_ece"]["hilbert"] <= 1
     assert main(["evaluate", *common, "--methods", "certainty,octomap", "--json"]) == 0
