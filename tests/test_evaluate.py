@@ -78,3 +78,24 @@ def test_evaluate_bad_options_one_line(tmp_path, capsys, args, words):
 def test_evaluate_missing_file(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "nope.log")]) == 2
     assert "nope.log" in capsys.readouterr().err
+
+
+def test_evaluate_prints_the_navigation_tables_from_the_json_numbers(tmp_path, capsys):
+    log = _room_log(tmp_path / "room.log")
+    common = [str(log), "--resolution", "0.1", "--boot", "5", "--methods", "certainty,mean3x3", "--group", "seen"]
+    assert main(["evaluate", *common, "--json"]) == 0
+    nav = json.loads(capsys.readouterr().out)["_nav"]
+    assert main(["evaluate", *common]) == 0
+    out = capsys.readouterr().out
+    assert "nav2's reading of the written trinary map, seen cells" in out and "| dangerous misses % |" in out
+    nav_part = out[out.index("nav2's reading"):]
+    assert max(len(line) for line in nav_part.splitlines()) <= 120
+    first_table = nav_part[:nav_part.index("walls of")]
+    rows = {line.split(" | ")[0][2:]: line for line in first_table.splitlines() if line.startswith("| ")}
+    entry = nav["certainty"]["seen"]
+    recall = f"{100 * entry['lethal_recall']:.2f} {100 * entry['lethal_recall_diff_ci'][0]:+.2f}.."
+    assert recall in rows["certainty"]
+    assert f"| raw | {100 * nav['raw']['seen']['lethal_recall']:.2f} | " in out
+    assert f"| {nav['certainty']['map']['thickness']:.2f} |" in out
+    assert main(["evaluate", *common, "--json", "--no-nav"]) == 0
+    assert "_nav" not in json.loads(capsys.readouterr().out)

@@ -102,13 +102,13 @@ NAV_COLUMNS = (("lethal_recall", "lethal recall"), ("lethal_precision", "lethal 
                ("miss_rate", "dangerous misses"), ("far_miss_rate", "misses > 0.5 m"), ("ghost_rate", "ghosts"))
 
 
-def _percent(entry, metric):
+def _percent(entry, metric, interval=True):
     """``"70.56 +7.41..+9.30"``: the metric in percent and its paired interval to raw in percentage points."""
     value = entry[metric]
-    if value != value:
+    if value != value:  # no cells to divide by (e.g. the raw grid's lethal precision in never-seen cells)
         return "-"
     lo, hi = entry.get(metric + "_diff_ci", (float("nan"), float("nan")))
-    if lo != lo or (lo == 0 and hi == 0):  # the reference row itself, or no intervals
+    if not interval or lo != lo:  # the reference row, no intervals (--boot 0), or no resample had the cells
         return f"{100 * value:.2f}"
     return f"{100 * value:.2f} {100 * lo:+.2f}..{100 * hi:+.2f}"
 
@@ -121,14 +121,16 @@ def nav_tables(nav: dict, group: str) -> str:
     from crfmap.repro.report import markdown_table
 
     header = ["method"] + [title + " %" for _, title in NAV_COLUMNS]
-    rows = [[name] + [_percent(entry[group], m) for m, _ in NAV_COLUMNS] for name, entry in nav.items()]
-    first = (f"nav2's reading of the written trinary map, {group} cells: % of the held-out occupied cells (ghosts: of "
-             "the cells passed twice, never hit), then the paired 95% interval of the difference to raw [points]\n")
+    rows = [[name] + [_percent(entry[group], m, interval=name != "raw") for m, _ in NAV_COLUMNS]
+            for name, entry in nav.items()]  # raw: the reference of every interval
+    first = (f"nav2's reading of the written trinary map, {group} cells: % of the held-out occupied cells\n"
+             "(ghosts: of the cells passed twice, never hit), then the paired 95% interval of the difference to raw\n")
     shape_header = ["method", "wall thickness [cells]", "lethal pieces / 10 m", "lethal cells",
-                    "never-seen cells called free", "of them held-out occupied"]
+                    "never-seen, called free", "of them occupied"]
     shape_rows = [[name, f"{m['thickness']:.2f}", f"{m['components_per_10m']:.1f}", m["lethal_cells"],
                    m["unknown_free"], m["unknown_free_occupied"]] for name, m in ((n, e["map"]) for n, e in nav.items())]
-    second = "walls of the whole map (lethal cells per cell of skeleton length; 8-connected pieces)\n"
+    second = ("walls of the whole map: lethal cells per cell of skeleton length, 8-connected lethal pieces; cells the "
+              "first\nhalf never observed that the map calls free, and of them those the second half shows occupied\n")
     return first + markdown_table(header, rows) + second + markdown_table(shape_header, shape_rows)
 
 
