@@ -207,6 +207,7 @@ def _sklearn_scores(p, y):
 
     if y.size == 0:
         return float("nan"), float("nan")
+    y = y.astype(np.int8)  # integer labels: scikit-learn's label checks are faster on them
     auc = float(roc_auc_score(y, p)) if 0 < y.sum() < y.size else float("nan")
     nll = float(log_loss(y, np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR), labels=[0, 1]))
     return auc, nll
@@ -275,7 +276,8 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
             entry["auc"], entry["nll"] = _sklearn_scores(p[r.mask], r.labels)
             out[name][group] = entry
             if r.draws is not None and n_boot:
-                resampled = dict(zip(COUNTS, sums @ r.draws.T))
+                # einsum, not BLAS: a product this small gains nothing from threads, and BLAS threads spin on a busy machine
+                resampled = dict(zip(COUNTS, np.einsum("kb,nb->kn", sums, r.draws)))
                 boot[name][group] = {m: _ratio(resampled[num], resampled[den]) for m, (num, den) in RATIOS.items()}
     for name in probs:
         for group in GROUPS:

@@ -21,7 +21,8 @@ occupied-labelled cells with P > 0.5). Confidence intervals come from a *spatial
 bootstrap*: the grid is cut into ``block`` x ``block`` cell squares, and squares (not cells,
 which are correlated with their neighbours) are resampled with replacement. Predictions scored
 together share the resamples, so :func:`score` also gives intervals of the paired difference to
-a reference prediction.
+a reference prediction; :func:`block_resamples` hands the same draws to other scorers
+(:mod:`crfmap.assess.navigation`: the map as nav2 reads it, which :func:`compare` adds under ``"_nav"``).
 
 >>> split = ScanSplit(first_hits=np.array([[0, 3, 0]]), first_passes=np.array([[2, 0, 0]]),
 ...                   second_hits=np.array([[0, 2, 1]]), second_passes=np.array([[3, 0, 0]]))

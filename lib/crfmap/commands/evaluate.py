@@ -113,6 +113,10 @@ def _percent(entry, metric, interval=True):
     return f"{100 * value:.2f} {100 * lo:+.2f}..{100 * hi:+.2f}"
 
 
+def _fixed(value, digits):
+    return "-" if value != value else f"{value:.{digits}f}"  # NaN: no lethal cell at all
+
+
 def nav_tables(nav: dict, group: str) -> str:
     """The two navigation tables of ``compare(...)["_nav"]``: nav2's reading of ``group`` cells, and the whole map's walls.
 
@@ -123,11 +127,12 @@ def nav_tables(nav: dict, group: str) -> str:
     header = ["method"] + [title + " %" for _, title in NAV_COLUMNS]
     rows = [[name] + [_percent(entry[group], m, interval=name != "raw") for m, _ in NAV_COLUMNS]
             for name, entry in nav.items()]  # raw: the reference of every interval
-    first = (f"nav2's reading of the written trinary map, {group} cells: % of the held-out occupied cells\n"
-             "(ghosts: of the cells passed twice, never hit), then the paired 95% interval of the difference to raw\n")
+    first = (f"nav2's reading of the written trinary map, {group} cells. Recall, misses: % of the held-out occupied "
+             "cells;\nprecision: % of the held-out cells called lethal; ghosts: % of the cells passed twice, never hit; "
+             "each with\nthe paired 95% interval of its difference to raw [percentage points]\n")
     shape_header = ["method", "wall thickness [cells]", "lethal pieces / 10 m", "lethal cells",
                     "never-seen, called free", "of them occupied"]
-    shape_rows = [[name, f"{m['thickness']:.2f}", f"{m['components_per_10m']:.1f}", m["lethal_cells"],
+    shape_rows = [[name, _fixed(m["thickness"], 2), _fixed(m["components_per_10m"], 1), m["lethal_cells"],
                    m["unknown_free"], m["unknown_free_occupied"]] for name, m in ((n, e["map"]) for n, e in nav.items())]
     second = ("walls of the whole map: lethal cells per cell of skeleton length, 8-connected lethal pieces; cells the "
               "first\nhalf never observed that the map calls free, and of them those the second half shows occupied\n")
