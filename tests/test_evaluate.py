@@ -52,7 +52,8 @@ def test_evaluate_methods_select_rows_and_peers_are_in_the_json(tmp_path, capsys
     assert not re.search(r"^\| thesis +\|", out, re.M) and "peer wall time: octomap" in out
     assert main(["evaluate", *common, "--methods", "octomap,hilbert", "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
-    assert set(got) == {"raw", "octomap", "hilbert", "_seconds", "_ece"}
+    assert set(got) == {"raw", "octomap", "hilbert", "_seconds", "_ece", "_nav"}
+    assert set(got["_nav"]) == {"raw", "octomap", "hilbert"}
     assert got["octomap"]["all"]["brier_ci"][0] <= got["octomap"]["all"]["brier"] <= got["octomap"]["all"]["brier_ci"][1]
     assert 0 <= got["_ece"]["hilbert"] <= 1
     assert main(["evaluate", *common, "--methods", "certainty,octomap", "--json"]) == 0
@@ -78,3 +79,24 @@ def test_evaluate_bad_options_one_line(tmp_path, capsys, args, words):
 def test_evaluate_missing_file(tmp_path, capsys):
     assert main(["evaluate", str(tmp_path / "nope.log")]) == 2
     assert "nope.log" in capsys.readouterr().err
+
+
+def test_evaluate_prints_the_navigation_tables_from_the_json_numbers(tmp_path, capsys):
+    log = _room_log(tmp_path / "room.log")
+    common = [str(log), "--resolution", "0.1", "--boot", "5", "--methods", "certainty,mean3x3", "--group", "seen"]
+    assert main(["evaluate", *common, "--json"]) == 0
+    nav = json.loads(capsys.readouterr().out)["_nav"]
+    assert main(["evaluate", *common]) == 0
+    out = capsys.readouterr().out
+    assert "nav2's reading of the written trinary map, seen cells" in out and "| dangerous misses % |" in out
+    nav_part = out[out.index("nav2's reading"):]
+    assert max(len(line) for line in nav_part.splitlines()) <= 120
+    first_table = nav_part[:nav_part.index("walls of")]
+    rows = {line.split(" | ")[0][2:]: line for line in first_table.splitlines() if line.startswith("| ")}
+    entry = nav["certainty"]["seen"]
+    recall = f"{100 * entry['lethal_recall']:.2f} {100 * entry['lethal_recall_diff_ci'][0]:+.2f}.."
+    assert recall in rows["certainty"]
+    assert f"| raw | {100 * nav['raw']['seen']['lethal_recall']:.2f} | " in out
+    assert f"| {nav['certainty']['map']['thickness']:.2f} |" in out
+    assert main(["evaluate", *common, "--json", "--no-nav"]) == 0
+    assert "_nav" not in json.loads(capsys.readouterr().out)

@@ -161,3 +161,27 @@ def test_a_split_scored_again_gives_the_same_numbers_and_notices_new_counts():
     sp.second_hits = counts[0] * 2  # new counts: new labels and groups (repr: NaN equals NaN)
     assert repr(score(sp, preds, n_boot=0)) == repr(score(ScanSplit(counts[0], counts[1], counts[0] * 2, counts[3]),
                                                           preds, n_boot=0))
+
+
+def test_the_split_keeps_each_halfs_scans(room):
+    for parity in (0, 1):
+        sp = scan_split(room, 0.1, parity=parity, bounds=(0, 0, 2, 2))
+        assert sp.first_scans.stamps.tolist() == split_scans(room, parity).stamps.tolist()
+        assert sp.second_scans.stamps.tolist() == split_scans(room, 1 - parity).stamps.tolist()
+        h2, e2 = count_hits(sp.second_scans, 0.1, bounds=(0, 0, 2, 2))
+        assert np.array_equal(h2, sp.second_hits) and np.array_equal(e2, sp.second_passes)
+
+
+def test_block_resamples_are_the_draws_score_uses():
+    from crfmap.assess.scansplit import block_resamples, percentile_interval
+
+    rng = np.random.default_rng(5)
+    sp = ScanSplit(*(rng.integers(0, 3, (40, 40)) for _ in range(4)))
+    p = sp.raw_probability()
+    s = score(sp, {"raw": p}, n_boot=25, block=8, seed=4, metrics=("brier",))
+    r = block_resamples(sp, n_boot=25, block=8, seed=4)
+    for group in ("all", "seen", "unseen"):
+        g = r[group]
+        cells, errors = g.draws[:, g.inverse], (p[g.mask] - g.labels) ** 2  # [resample, cell] weights
+        brier = (cells * errors).sum(axis=1) / cells.sum(axis=1)
+        assert s["raw"][group]["brier_ci"] == pytest.approx(percentile_interval(brier, 0.95))

@@ -21,7 +21,8 @@ occupied-labelled cells with P > 0.5). Confidence intervals come from a *spatial
 bootstrap*: the grid is cut into ``block`` x ``block`` cell squares, and squares (not cells,
 which are correlated with their neighbours) are resampled with replacement. Predictions scored
 together share the resamples, so :func:`score` also gives intervals of the paired difference to
-a reference prediction.
+a reference prediction; :func:`block_resamples` hands the same draws to other scorers
+(:mod:`crfmap.assess.navigation`: the map as nav2 reads it, which :func:`compare` adds under ``"_nav"``).
 
 >>> split = ScanSplit(first_hits=np.array([[0, 3, 0]]), first_passes=np.array([[2, 0, 0]]),
 ...                   second_hits=np.array([[0, 2, 1]]), second_passes=np.array([[3, 0, 0]]))
@@ -70,8 +71,9 @@ def split_scans(scans, parity: int):
 class ScanSplit:
     """Hit counts ([y, x] int arrays on one grid) of the two halves of a recording's scans.
 
-    ``first_*`` build the map; ``second_*`` only score it. ``first_scans`` (optional) keeps the
-    first half's ScanSet, for baselines that need the scans themselves (the log-odds grid).
+    ``first_*`` build the map; ``second_*`` only score it. ``first_scans`` and ``second_scans``
+    (optional, set by :func:`scan_split`) keep each half's ScanSet, for what needs the scans
+    themselves (the log-odds grid from the first half; scoring the map by the second half's scans).
     """
 
     first_hits: np.ndarray
@@ -83,6 +85,7 @@ class ScanSplit:
     bounds: tuple | None = None  # (xmin, ymin, xmax, ymax) [m] given to the builder
     source: str = ""
     first_scans: object = field(default=None, repr=False)
+    second_scans: object = field(default=None, repr=False)
 
     def __post_init__(self):
         arrays = [np.asarray(a) for a in (self.first_hits, self.first_passes, self.second_hits, self.second_passes)]
@@ -152,7 +155,8 @@ def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress:
     h1, e1 = count_hits(first, resolution, bounds=bounds, progress=progress)
     h2, e2 = count_hits(second, resolution, bounds=bounds, progress=progress)
     return ScanSplit(h1, e1, h2, e2, resolution=float(resolution), origin=(float(bounds[0]), float(bounds[1]), 0.0),
-                     bounds=tuple(float(b) for b in bounds), source=getattr(scans, "source", ""), first_scans=first)
+                     bounds=tuple(float(b) for b in bounds), source=getattr(scans, "source", ""), first_scans=first,
+                     second_scans=second)
 
 
 # --- scoring ------------------------------------------------------------------------------
@@ -240,7 +244,12 @@ def _layout(split, block) -> dict:
     return layout
 
 
-def _values(pred, shape, name):
+def check_probability(pred, shape, name) -> np.ndarray:
+    """``pred`` (an array or OccupancyGrid) as a float [y, x] array of P in [0, 1] of ``shape``, else InputError.
+
+    >>> check_probability([[0.2, 1.0]], (1, 2), "map").tolist()
+    [[0.2, 1.0]]
+    """
     p = pred.probability if isinstance(pred, OccupancyGrid) else np.asarray(pred, dtype=np.float64)
     p = getattr(p, "probability", p)
     if p.shape != shape:
@@ -277,21 +286,15 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
     if unknown or not groups or not metrics:
         raise InputError("groups/metrics", f"must be non-empty subsets of {GROUPS} and {METRICS}, "
                          f"got {unknown or 'none'}")
-    probs = {name: _values(p, split.shape, name) for name, p in predictions.items()}
-    layout = _layout(split, block)
-    rng = np.random.default_rng(seed)
-    alpha = (1 - level) / 2
+    probs = {name: check_probability(p, split.shape, name) for name, p in predictions.items()}
+    resamples = block_resamples(split, n_boot=n_boot, block=block, seed=seed)
     out = {name: {} for name in probs}
-    for group in GROUPS:  # every group draws its resamples, asked for or not: the same seed gives the same intervals
-        mask, y, uniq, inverse, counts = layout[group]
-        # resample blocks: a block's weight is how often it was drawn
-        draws = _draws(rng, len(uniq), n_boot) if len(uniq) else None
-        if group not in groups:
-            continue
+    for group in groups:
+        mask, y, inverse, draws = (getattr(resamples[group], k) for k in ("mask", "labels", "inverse", "draws"))
         boot = {}
         for name, p in probs.items():
-            scorer = _Scorer(p[mask], y, inverse, len(uniq), auc="auc" in metrics, logloss="logloss" in metrics,
-                             counts=counts)
+            scorer = _Scorer(p[mask], y, inverse, resamples[group].n_blocks, auc="auc" in metrics,
+                             logloss="logloss" in metrics, counts=resamples[group].counts)
             values = scorer.metrics()
             out[name][group] = dict({m: values[m] for m in metrics}, cells=int(mask.sum()), walls=int(y.sum()))
             boot[name] = scorer.resampled(draws) if draws is not None and n_boot else {}
@@ -299,23 +302,63 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
             entry = out[name][group]
             for m in metrics:
                 if boot[name]:
-                    entry[m + "_ci"] = _interval(boot[name][m], alpha)
+                    entry[m + "_ci"] = percentile_interval(boot[name][m], level)
                 if reference is not None:
                     entry[m + "_diff"] = entry[m] - out[reference][group][m]
                     if boot[name]:
-                        entry[m + "_diff_ci"] = _interval(boot[name][m] - boot[reference][m], alpha)
+                        entry[m + "_diff_ci"] = percentile_interval(boot[name][m] - boot[reference][m], level)
     return out
 
 
-def _interval(values, alpha):
-    v = values[np.isfinite(values)]
+@dataclass(frozen=True)
+class GroupBlocks:
+    """One group's cells cut into bootstrap blocks, and the block resamples :func:`score` draws for it."""
+
+    mask: np.ndarray  # [y, x] bool: the group's cells; every per-cell array below is in ``p[mask]`` order
+    labels: np.ndarray  # float 0/1 per cell: the second half calls it occupied
+    inverse: np.ndarray  # each cell's block index, 0 .. n_blocks - 1
+    n_blocks: int
+    counts: tuple  # (cells, walls) per block
+    draws: np.ndarray | None  # [n_boot, n_blocks]: how often each block was drawn; None when the group is empty
+
+
+def block_resamples(split: ScanSplit, n_boot: int = 200, block: int = DEFAULT_BLOCK, seed: int = 0) -> dict:
+    """``{group: GroupBlocks}``: the spatial-block resamples :func:`score` uses (the same seed, the same draws).
+
+    Every group draws its resamples in the order of :data:`GROUPS` from one generator seeded with
+    ``seed``, so anything scored with these draws is paired with :func:`score`'s intervals.
+
+    >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))
+    >>> r = block_resamples(sp, n_boot=3, block=4)
+    >>> r["all"].draws.shape, int(r["all"].draws.sum(axis=1)[0]) == r["all"].n_blocks
+    ((3, 4), True)
+    """
+    layout = _layout(split, block)
+    rng = np.random.default_rng(seed)
+    out = {}
+    for group in GROUPS:  # every group draws, asked for or not: the same seed gives the same intervals
+        mask, y, uniq, inverse, counts = layout[group]
+        draws = _draws(rng, len(uniq), n_boot) if len(uniq) else None  # a block's weight: how often it was drawn
+        out[group] = GroupBlocks(mask, y, inverse, len(uniq), counts, draws)
+    return out
+
+
+def percentile_interval(values, level: float = 0.95) -> tuple:
+    """The central ``level`` percentile interval of the finite ``values`` (NaN, NaN if none).
+
+    >>> percentile_interval(np.arange(101.0), 0.5)
+    (25.0, 75.0)
+    """
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
     if v.size == 0:
         return (float("nan"), float("nan"))
+    alpha = (1 - level) / 2
     return (float(np.quantile(v, alpha)), float(np.quantile(v, 1 - alpha)))
 
 
 def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, block: int = DEFAULT_BLOCK,
-            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None) -> dict:
+            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None, nav: bool = True) -> dict:
     """Score the baselines (:func:`crfmap.assess.baselines.all_baselines`), ``preset`` and peers on a split.
 
     ``methods``: the rows to score, by name (baselines, ``preset``, the published peers of
@@ -323,8 +366,11 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     ``"raw"`` is always scored, as the paired reference. Returns the :func:`score` dictionary;
     the preset's LBP result summary is under ``"_lbp"``, each peer's wall time [s] under
     ``"_seconds"``, every other row's paired Brier and log-loss differences to the preset under
-    ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``); ``keep_beliefs``: every scored ``{name: P}`` under ``"_beliefs"`` too (arrays:
-    for a caller scoring them again). ``extra`` adds more ``{name: P}`` rows.
+    ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``); ``keep_beliefs``: every
+    scored ``{name: P}`` under ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more
+    ``{name: P}`` rows. ``nav`` (default): every row read the way nav2 reads the written trinary map, scored with
+    :func:`crfmap.assess.navigation.nav_scores` against the raw grid on the same resamples, under ``"_nav"``
+    (``{name: {group: {metric, metric_ci, metric_diff, metric_diff_ci}, "map": {...}}}``).
     """
     from crfmap.assess.baselines import BASELINES, all_baselines
     from crfmap.assess.peers import PEERS, peer_rows
@@ -344,6 +390,11 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     predictions.update(peers)
     predictions.update(extra or {})
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
+    if nav:
+        from crfmap.assess.navigation import nav_scores  # navigation imports this module: here, not at the top
+
+        out["_nav"] = nav_scores(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw",
+                                 scores=out)
     if out_lbp is not None:
         out["_lbp"] = out_lbp
     if seconds:

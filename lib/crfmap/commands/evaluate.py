@@ -17,7 +17,11 @@ def add_parser(sub):
         "observed walls, for all cells the odd scans observed and for those the even scans saw / never saw, "
         "with spatial-block bootstrap intervals, and the expected calibration error. Rows: the baselines, the "
         "preset and the published peers octomap (OctoMap's clamped log-odds update) and hilbert (Bayesian "
-        "Hilbert maps).",
+        "Hilbert maps). Then the navigation tables (crfmap.assess.navigation): every map read the way nav2 reads "
+        "the trinary map crfmap infer writes (lethal P >= 0.65, free P <= 0.196 after rounding to a percent), "
+        "lethal recall and precision, dangerous misses (held-out occupied cells called free; those farther than "
+        "0.5 m from every lethal cell), ghost obstacles (cells passed twice and never hit, called lethal), with "
+        "paired intervals of the difference to the raw grid, and wall thickness and continuity.",
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
@@ -34,6 +38,7 @@ def add_parser(sub):
     p.add_argument("--block", type=int, default=16, help="bootstrap block side in cells")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap")
     p.add_argument("--group", default="all", choices=["all", "seen", "unseen"], help="cells to tabulate")
+    p.add_argument("--no-nav", dest="nav", action="store_false", help="skip the navigation metrics and tables")
     p.add_argument("--json", action="store_true", help="print the full scores as one JSON object")
     return p
 
@@ -75,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     rec = load_recording(args.input, max_range=args.max_range)
     split = scan_split(rec.scans, args.resolution, parity=args.parity)
     scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed, methods=methods,
-                     keep_beliefs=True)
+                     keep_beliefs=True, nav=args.nav)
     beliefs = scores.pop("_beliefs")
     calibration = split_calibration(split, beliefs, group=args.group)
     scores["_ece"] = {name: c["ece"] for name, c in calibration.items()}
@@ -91,7 +96,50 @@ def run(args: argparse.Namespace) -> int:
     print(tabulate(rows, header, tablefmt="github", floatfmt=".4f"))
     if "_seconds" in scores:
         print("peer wall time: " + ", ".join(f"{n} {s:.1f} s" for n, s in scores["_seconds"].items()))
+    if "_nav" in scores:
+        print(nav_tables(scores["_nav"], args.group), end="")
     return 0
+
+
+NAV_COLUMNS = (("lethal_recall", "lethal recall"), ("lethal_precision", "lethal precision"),
+               ("miss_rate", "dangerous misses"), ("far_miss_rate", "misses > 0.5 m"), ("ghost_rate", "ghosts"))
+
+
+def _percent(entry, metric, interval=True):
+    """``"70.56 +7.41..+9.30"``: the metric in percent and its paired interval to raw in percentage points."""
+    value = entry[metric]
+    if value != value:  # no cells to divide by (e.g. the raw grid's lethal precision in never-seen cells)
+        return "-"
+    lo, hi = entry.get(metric + "_diff_ci", (float("nan"), float("nan")))
+    if not interval or lo != lo:  # the reference row, no intervals (--boot 0), or no resample had the cells
+        return f"{100 * value:.2f}"
+    return f"{100 * value:.2f} {100 * lo:+.2f}..{100 * hi:+.2f}"
+
+
+def _fixed(value, digits):
+    return "-" if value != value else f"{value:.{digits}f}"  # NaN: no lethal cell at all
+
+
+def nav_tables(nav: dict, group: str) -> str:
+    """The two navigation tables of ``compare(...)["_nav"]``: nav2's reading of ``group`` cells, and the whole map's walls.
+
+    Both fit a 120-column terminal with the project's row names.
+    """
+    from crfmap.repro.report import markdown_table
+
+    header = ["method"] + [title + " %" for _, title in NAV_COLUMNS]
+    rows = [[name] + [_percent(entry[group], m, interval=name != "raw") for m, _ in NAV_COLUMNS]
+            for name, entry in nav.items()]  # raw: the reference of every interval
+    first = (f"nav2's reading of the written trinary map, {group} cells. Recall, misses: % of the held-out occupied "
+             "cells;\nprecision: % of the held-out cells called lethal; ghosts: % of the cells passed twice, never hit; "
+             "each with\nthe paired 95% interval of its difference to raw [percentage points]\n")
+    shape_header = ["method", "wall thickness [cells]", "lethal pieces / 10 m", "lethal cells",
+                    "never-seen, called free", "of them occupied"]
+    shape_rows = [[name, _fixed(m["thickness"], 2), _fixed(m["components_per_10m"], 1), m["lethal_cells"],
+                   m["unknown_free"], m["unknown_free_occupied"]] for name, m in ((n, e["map"]) for n, e in nav.items())]
+    second = ("walls of the whole map: lethal cells per cell of skeleton length, 8-connected lethal pieces; cells the "
+              "first\nhalf never observed that the map calls free, and of them those the second half shows occupied\n")
+    return first + markdown_table(header, rows) + second + markdown_table(shape_header, shape_rows)
 
 
 def _finite(value):
