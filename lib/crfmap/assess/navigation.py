@@ -60,7 +60,7 @@ from crfmap.assess.scansplit import (DEFAULT_BLOCK, GROUPS, LOG_FLOOR, ScanSplit
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
 from crfmap.io.map_server import FREE_THRESH_DEFAULT, OCCUPIED_THRESH_DEFAULT
-from crfmap.io.map_server import _pixels_from_occupancy  # map_saver's per-cell pixel rule (one rule, not a copy)
+from crfmap.io.map_server import pixels_from_occupancy  # map_saver's per-cell pixel rule (one rule, not a copy)
 from crfmap.io.nav2_costmap import LETHAL_OBSTACLE, NO_INFORMATION, static_layer_costs
 from crfmap.io.nav2_loader import DEFAULT_LOADER, LOADERS, Pixels, occupancy
 
@@ -83,7 +83,7 @@ MAP_METRICS = ("unknown_free", "unknown_free_observed", "unknown_free_occupied",
 def _value_table(loader: str) -> np.ndarray:
     """nav2's OccupancyGrid value of each written value -1..100 (index v + 1): map_saver's trinary pixel, loaded."""
     written = np.arange(-1, 101, dtype=np.int16).reshape(1, -1)
-    grey, _ = _pixels_from_occupancy(written, "trinary", OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT)
+    grey, _ = pixels_from_occupancy(written, "trinary", OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT)
     loaded = occupancy(Pixels.from_grey8(grey), "trinary", 0, OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT,
                        loader=loader)
     return loaded[0]

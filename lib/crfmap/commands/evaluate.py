@@ -125,7 +125,7 @@ def nav_tables(nav: dict, group: str) -> str:
 
     Both fit a 120-column terminal with the project's row names.
     """
-    from crfmap.repro.report import markdown_table
+    from tabulate import tabulate
 
     header = ["method"] + [title + " %" for _, title in NAV_COLUMNS]
     rows = [[name] + [_percent(entry[group], m, interval=name != "raw") for m, _ in NAV_COLUMNS]
@@ -139,7 +139,10 @@ def nav_tables(nav: dict, group: str) -> str:
                    m["unknown_free"], m["unknown_free_occupied"]] for name, m in ((n, e["map"]) for n, e in nav.items())]
     second = ("walls of the whole map: lethal cells per cell of skeleton length, 8-connected lethal pieces; cells the "
               "first\nhalf never observed that the map calls free, and of them those the second half shows occupied\n")
-    return first + markdown_table(header, rows) + second + markdown_table(shape_header, shape_rows)
+    def table(head, body):
+        return tabulate(body, head, tablefmt="github", disable_numparse=True) + "\n"
+
+    return first + table(header, rows) + second + table(shape_header, shape_rows)
 
 
 def _finite(value):

@@ -240,7 +240,7 @@ def map_yaml_text(image_name, mode, resolution, origin, occupied_thresh, free_th
             f"free_thresh: {format_number(free_thresh)}")
 
 
-def _pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
+def pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
     """nav2's ``tryWriteMapToFile`` per-cell rule: (grey uint8, alpha uint8 or None), top row first.
 
     Trinary: ``v <= rint(100 free)`` -> 254, ``v >= rint(100 occupied)`` -> 0, else and
@@ -345,7 +345,7 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
     mode, occ, free, image_format = _resolve_save_options(grid, mode, occupied_thresh, free_thresh,
                                                           image_format)
     image_path = yaml_path.with_suffix("." + image_format)
-    grey, alpha = _pixels_from_occupancy(grid.to_int8(), mode, occ, free)
+    grey, alpha = pixels_from_occupancy(grid.to_int8(), mode, occ, free)
     if saver not in LOADERS:
         raise InputError("saver", f"unknown map_saver {saver!r} (expected one of {', '.join(LOADERS)})")
     yaml_occ, yaml_free = (OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT) if (
