@@ -36,6 +36,59 @@ def brute_occ_dist(lethal, resolution, max_dist):
     return out
 
 
+def nav2_brushfire(lethal, scale, max_occ_dist):
+    """map_cspace.cpp map_update_cspace line by line, with libstdc++'s std::priority_queue (push_heap / pop_heap).
+
+    Each cell takes its distance to the obstacle cell its first-popped neighbour was reached from, which is
+    not always the nearest one: nav2's occ_dist is an upper bound on the Euclidean distance.
+    """
+    def sift_up(heap, hole, value):  # __push_heap with comp(a, b) = a.occ_dist > b.occ_dist
+        parent = (hole - 1) // 2
+        while hole > 0 and heap[parent][0] > value[0]:
+            heap[hole], hole, parent = heap[parent], parent, (parent - 1) // 2
+        heap[hole] = value
+
+    def pop(heap):  # pop_heap (__adjust_heap) then pop_back
+        last = len(heap) - 1
+        if last > 0:
+            value, heap[last] = heap[last], heap[0]
+            hole = second = 0
+            while second < (last - 1) // 2:
+                second = 2 * (second + 1)
+                if heap[second][0] > heap[second - 1][0]:
+                    second -= 1
+                heap[hole], hole = heap[second], second
+            if last % 2 == 0 and second == (last - 2) // 2:
+                second = 2 * (second + 1)
+                heap[hole], hole = heap[second - 1], second - 1
+            sift_up(heap, hole, value)
+        heap.pop()
+
+    size_y, size_x = lethal.shape
+    cell_radius = int(max_occ_dist / scale)
+    occ = np.full(lethal.shape, np.float32(max_occ_dist), np.float32)
+    marked = lethal.copy()
+    heap = []
+    for i in range(size_x):
+        for j in range(size_y):
+            if lethal[j, i]:
+                occ[j, i] = 0.0
+                heap.append((np.float32(0.0), i, j, i, j))
+                sift_up(heap, len(heap) - 1, heap[-1])
+    while heap:
+        _, i, j, si, sj = heap[0]
+        for ni, nj in ((i - 1, j), (i, j - 1), (i + 1, j), (i, j + 1)):  # enqueue's order
+            if 0 <= ni < size_x and 0 <= nj < size_y and not marked[nj, ni]:
+                d = math.sqrt((ni - si) ** 2 + (nj - sj) ** 2)
+                if d <= cell_radius:
+                    occ[nj, ni] = d * scale
+                    heap.append((occ[nj, ni], ni, nj, si, sj))
+                    sift_up(heap, len(heap) - 1, heap[-1])
+                    marked[nj, ni] = True
+        pop(heap)
+    return occ
+
+
 def naive_log_weight(probability, resolution, origin, scan_ranges, scan, pose, model):
     """likelihood_field_model.cpp sensorFunction for one scan at one laser pose, and updateFilter's range rules."""
     values = OccupancyGrid(probability).to_int8()
@@ -78,6 +131,24 @@ def test_distance_field_matches_brute_force(seed):
     max_dist = float(rng.choice([0.12, 0.2, 0.37, 2.0]))  # 0.12 / 0.05 = 2.4 cells: cut at 2
     np.testing.assert_allclose(distance_field(lethal, RES, max_dist), brute_occ_dist(lethal, RES, max_dist),
                                rtol=1e-6)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_nav2_brushfire_is_an_upper_bound_of_the_exact_distance(seed):
+    """Where nav2's brushfire and the exact distance part (see the module doc): never below it, zero on obstacles."""
+    rng = np.random.default_rng(seed)
+    lethal = rng.random((24, 30)) < 0.05
+    exact, nav2 = distance_field(lethal, RES, 0.4), nav2_brushfire(lethal, RES, 0.4)
+    assert np.all(nav2 >= exact - 1e-7)
+    np.testing.assert_array_equal(nav2[lethal], 0.0)
+    assert nav2.max() <= np.float32(0.4)  # with the bound below: the exact cap cells are capped in nav2 too
+    assert np.mean(nav2 > exact + 1e-6) < 0.15
+
+
+def test_nav2_brushfire_is_exact_beside_one_straight_wall():
+    lethal = np.zeros((15, 12), bool)
+    lethal[:, 5] = True
+    np.testing.assert_allclose(nav2_brushfire(lethal, RES, 2.0), distance_field(lethal, RES, 2.0), rtol=1e-6)
 
 
 def test_distance_field_without_obstacles_is_the_cap():

@@ -24,11 +24,16 @@ The model, as read from ros-navigation/navigation2 (main at commit a3a97043ee93,
   against :func:`crfmap.io.map_server.save_map` / ``load_map`` in the tests). Free and unknown cells
   play no part in this model. ``convertMap`` keeps the map's origin position and ignores its yaw.
 - ``nav2_amcl/src/map/map_cspace.cpp``, ``map_update_cspace`` (lines 148-210) with ``CachedDistanceMap``
-  and ``enqueue`` (lines 49-141): every cell's ``occ_dist`` is its Euclidean distance [m] to the nearest
-  obstacle cell (a brushfire from the obstacle cells that measures each cell against the cell it was
-  reached from), kept only while the distance in cells is <= ``int(max_occ_dist / resolution)``, else
-  ``max_occ_dist``; stored as float. :func:`distance_field` computes it with
-  ``scipy.ndimage.distance_transform_edt`` and the same cut.
+  and ``enqueue`` (lines 49-141): ``occ_dist`` [m] is meant as each cell's Euclidean distance to the
+  nearest obstacle cell, kept while the distance in cells is <= ``int(max_occ_dist / resolution)``, else
+  ``max_occ_dist``; stored as float. :func:`distance_field` computes exactly that with
+  ``scipy.ndimage.distance_transform_edt`` and the same cut. nav2's own brushfire (a priority queue from the
+  obstacle cells; a cell takes the distance to the obstacle its first-popped neighbour came from) is not
+  always the nearest obstacle: a line-by-line port (``nav2_brushfire`` in the tests) is never below the
+  exact distance but above it in 11-13 % of the cells of the Intel maps (raw, default preset, OctoMap at
+  0.05 m), by up to 0.17 m. Scored with the port's field instead (Intel, the 455 held-out odd scans),
+  every metric moves by at most +0.01 log margin, 4 mm median translation error and 0.7 points of the
+  found share, in the same direction for the three maps, and no ordering between them changes.
 - ``nav2_amcl/include/nav2_amcl/map/map.hpp`` (lines 121-133) with ``convertMap``: a point (x, y) falls in
   cell ``floor((x - origin_x') / res + 0.5) + size_x / 2`` where ``origin_x' = origin_x + (size_x / 2) * res``
   (integer halves), i.e. AMCL *rounds* to the nearest cell corner index: it reads cell i as centred on
