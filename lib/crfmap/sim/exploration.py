@@ -16,7 +16,7 @@ frontier, is given up (its neighbourhood is blacklisted, as explore_lite does), 
 resolve does not hold the robot forever.
 
 >>> from crfmap.world.scenes import enclosed_boxes
->>> run = explore(enclosed_boxes("train"), "raw", ExploreSettings(max_scans=40), seed=0)
+>>> run = explore(enclosed_boxes("train"), "raw", ExploreSettings(robot_radius=None, max_scans=40), seed=0)
 >>> run.stop, run.collisions, bool(run.coverage >= 0.95)
 ('coverage', 0, True)
 """
@@ -263,7 +263,7 @@ def explore(scene: Scene, onboard="raw", settings: ExploreSettings | None = None
 
 
 def map_scores(probability, scene: Scene, target) -> dict:
-    """The final map against the truth, on the reachable free space ``target`` and the cells beside it.
+    """The final map against the truth, on the reachable free space ``target`` and its 8 neighbours.
 
     ``dangerous_misses``: true wall cells there the map calls free (P <= 0.196), and their fraction of the
     true wall cells there; ``wall_iou``: lethal (P >= 0.65) against true walls there; ``ghosts``: true free
