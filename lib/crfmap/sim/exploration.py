@@ -31,7 +31,7 @@ import numpy as np
 from crfmap.checks import check_int, check_number
 from crfmap.errors import InputError
 from crfmap.mapping.builder import HitCounter
-from crfmap.sim.frontiers import UNKNOWN_READINGS, costmap, frontiers, path_to, plan_path, shortest_paths
+from crfmap.sim.frontiers import FREE, LETHAL, UNKNOWN_READINGS, costmap, frontiers, path_to, plan_path, shortest_paths
 from crfmap.sim.laser import Laser
 from crfmap.sim.onboard import make_onboard
 from crfmap.sim.simulator import add_range_noise, cast_rays
@@ -269,8 +269,6 @@ def map_scores(probability, scene: Scene, target) -> dict:
     true wall cells there; ``wall_iou``: lethal (P >= 0.65) against true walls there; ``ghosts``: true free
     cells of ``target`` the map calls lethal.
     """
-    from crfmap.sim.frontiers import FREE, LETHAL
-
     p = np.asarray(probability, np.float64)
     truth = scene.truth.probability > 0.5
     target = np.asarray(target, bool)
