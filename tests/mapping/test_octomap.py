@@ -91,3 +91,24 @@ def test_matches_the_octomap_library(seed):
     differ = np.abs(ours - theirs) > 1e-5
     assert (ours != 0.5).sum() > 300
     assert differ.sum() <= 3, np.argwhere(differ)
+
+
+def test_updater_scan_by_scan_equals_the_whole_recording():
+    from crfmap.mapping.octomap import OctoMapUpdater
+
+    rng = np.random.default_rng(3)
+    n, beams = 12, 45
+    poses = np.column_stack([rng.uniform(1, 3, n), rng.uniform(1, 3, n), rng.uniform(-3, 3, n)])
+    ranges = rng.uniform(0.2, 2.5, (n, beams)).astype(np.float32)
+    ranges[rng.random((n, beams)) < 0.1] = np.inf  # no returns: dropped, as in the whole-recording update
+    s = ScanSet(ranges, -math.pi, 2 * math.pi / beams, 0.05, 5.0, poses, np.arange(n, dtype=float))
+    whole = octomap_grid(s, 0.1, bounds=(0, 0, 4, 4))
+    up = OctoMapUpdater.for_sensor((0, 0, 4, 4), 0.1, s.angle_min, s.angle_increment, beams, 0.05, 5.0)
+    for r, p in zip(ranges, poses):
+        up.add_scan(r, p)
+    assert up.scans == n
+    np.testing.assert_array_equal(up.grid().probability, whole.probability)
+    with pytest.raises(InputError, match="ranges"):
+        up.add_scan(ranges[0, :3], poses[0])
+    with pytest.raises(InputError, match="laser_pose"):
+        up.add_scan(ranges[0], (9.0, 9.0, 0.0))

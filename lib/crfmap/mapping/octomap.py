@@ -170,3 +170,84 @@ def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, cla
             "p_miss": float(p_miss), "clamp_min": float(clamp_min), "clamp_max": float(clamp_max)}
     return OccupancyGrid(probability, resolution=g["resolution"], origin=(g["origin_x"], g["origin_y"], 0.0),
                          frame_id=getattr(scans, "frame_id", "map") or "map", meta=meta)
+
+
+class OctoMapUpdater:
+    """OctoMap's update one scan at a time (a robot mapping as it drives): the state of :func:`octomap_grid`.
+
+    After :meth:`add_scan` of every scan of a recording, in order, :meth:`grid` equals
+    :func:`octomap_grid` of it on the same grid with the same parameters (each scan updates a cell
+    at most once, as there).
+
+    >>> up = OctoMapUpdater.for_sensor((0, 0, 0.5, 0.1), 0.1, 0.0, 0.1, 1, 0.05, 5.0)
+    >>> up.add_scan(np.array([0.36], np.float32), (0.05, 0.05, 0.0))
+    >>> up.grid().probability.round(2).tolist()
+    [[0.4, 0.4, 0.4, 0.4, 0.7]]
+    """
+
+    def __init__(self, geometry, p_hit=P_HIT, p_miss=P_MISS, clamp_min=CLAMP_MIN, clamp_max=CLAMP_MAX):
+        l_hit, l_miss = _logit(p_hit, "p_hit"), _logit(p_miss, "p_miss")
+        l_min, l_max = _logit(clamp_min, "clamp_min"), _logit(clamp_max, "clamp_max")
+        if not (l_hit > 0 > l_miss):
+            raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
+        if not (l_min < 0 < l_max):
+            raise InputError("clamp_min/clamp_max", f"need clamp_min < 0.5 < clamp_max, got {clamp_min!r} and "
+                                                    f"{clamp_max!r}")
+        g = dict(geometry)
+        self.width, self.height, self.resolution = int(g["width"]), int(g["height"]), float(g["resolution"])
+        self.origin = (float(g["origin_x"]), float(g["origin_y"]), 0.0)
+        self.angles = np.asarray(g["angles"], np.float64)
+        self._sensor = (g["range_min"], g["range_max"], g["max_is_no_return"], g["free_range"])
+        f32 = np.float32
+        self._logodds_params = (f32(l_hit), f32(l_miss), f32(l_min), f32(l_max))
+        self.logodds = np.zeros((self.height, self.width), np.float32)
+        self._hit_stamp = np.full((self.height, self.width), -1, np.int64)
+        self._miss_stamp = np.full((self.height, self.width), -1, np.int64)
+        self._buf = np.empty((2 * (self.width + self.height) + 4, 2), np.int64)
+        self.scans = 0
+
+    @classmethod
+    def for_sensor(cls, bounds, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
+                   free_on_no_return=False, max_range_is_no_return=True, **params) -> "OctoMapUpdater":
+        """An updater for a grid over ``bounds`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
+        from crfmap.mapping.builder import _geometry
+        from crfmap.recording import ScanSet
+
+        try:
+            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
+        except (TypeError, ValueError):
+            raise InputError("bounds", f"expected (xmin, ymin, xmax, ymax) in metres, got {bounds!r}") from None
+        if not (isinstance(n_beams, (int, np.integer)) and n_beams >= 1):
+            raise InputError("n_beams", f"must be a positive integer, got {n_beams!r}")
+        centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
+        probe = ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
+                        range_max, centre, np.zeros(1), source="sensor")
+        return cls(_geometry(probe, resolution, bounds, free_on_no_return, max_range_is_no_return), **params)
+
+    def add_scan(self, ranges, laser_pose) -> None:
+        """Update with one scan (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map)."""
+        r = np.asarray(ranges)
+        if r.shape != (len(self.angles),) or not np.issubdtype(r.dtype, np.floating):
+            raise InputError("ranges", f"expected {len(self.angles)} floating-point readings, got shape {r.shape}")
+        pose = np.asarray(laser_pose, dtype=np.float64).ravel()
+        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+            raise InputError("laser_pose", f"expected finite (x, y, yaw), got {laser_pose!r}")
+        u, v = (pose[0] - self.origin[0]) / self.resolution, (pose[1] - self.origin[1]) / self.resolution
+        if not (0 <= u < self.width and 0 <= v < self.height):
+            raise InputError("laser_pose", f"({pose[0]:.3f}, {pose[1]:.3f}) m lies outside the grid")
+        range_min, range_max, max_is_no_return, free_range = self._sensor
+        _octomap_update(r.astype(np.float32, copy=False)[None, :], self.angles, pose[None, :], range_min, range_max,
+                        max_is_no_return, free_range, self.origin[0], self.origin[1], self.resolution,
+                        *self._logodds_params, self.logodds, self._hit_stamp, self._miss_stamp, self.scans, self._buf)
+        self.scans += 1
+
+    def probability(self) -> np.ndarray:
+        """P(occupied) [y, x]: ``sigmoid(l)`` where a cell was updated, 0.5 elsewhere."""
+        p = 1.0 / (1.0 + np.exp(-self.logodds.astype(np.float64)))
+        p[(self._hit_stamp < 0) & (self._miss_stamp < 0)] = UNKNOWN
+        return p
+
+    def grid(self) -> OccupancyGrid:
+        """The map so far, as :func:`octomap_grid` returns it."""
+        return OccupancyGrid(self.probability(), resolution=self.resolution, origin=self.origin,
+                             meta={"model": "octomap", "scans": self.scans})
