@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from crfmap.assess.localisation import (Beams, LaserModel, LikelihoodField, beam_indices, compare_localisation,
-                                        distance_field, localise, nav2_lethal, pose_offsets, search_poses,
-                                        start_poses)
+from crfmap.assess.likelihood_field import (Beams, LaserModel, LikelihoodField, beam_indices, distance_field,
+                                            nav2_lethal)
+from crfmap.assess.localisation import compare_localisation, localise, pose_offsets, search_poses, start_poses
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.io.map_server import load_map, save_map

@@ -8,7 +8,8 @@ import pytest
 
 from crfmap.assess.navigation import (COUNTS, GHOST_PASSES, RATIOS, nav2_classes, nav2_values, nav_scores,
                                       skeleton_length, wall_shape)
-from crfmap.assess.scansplit import GROUPS, ScanSplit, block_resamples, compare, percentile_interval, score
+from crfmap.assess.comparison import compare
+from crfmap.assess.scansplit import GROUPS, ScanSplit, block_resamples, percentile_interval, score
 from crfmap.commands.build import save_map_output
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid

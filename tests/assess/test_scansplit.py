@@ -92,7 +92,7 @@ def test_a_subset_of_groups_and_metrics_equals_the_full_result():
 
 
 def test_compare_keeps_the_grids_it_scored_only_when_asked():
-    from crfmap.assess.scansplit import compare
+    from crfmap.assess.comparison import compare
 
     sp = ScanSplit(*(np.random.default_rng(6).integers(0, 3, (20, 20)) for _ in range(4)))
     kept = compare(sp, n_boot=0, keep_beliefs=True)

@@ -111,7 +111,7 @@ def test_fixture_log_builds(tmp_path):
     assert read_carmen(tmp_path / "ok.log").scans.ranges.shape == (4, 9)
 
 
-# --- the no-return rule (crfmap.io.carmen.no_return_rule) on synthetic logs whose codes vary ---------------
+# --- the no-return rule (crfmap.io.no_return.no_return_rule) on synthetic logs whose codes vary ---------------
 def _spread_log(tmp_path, codes, n_scans=200, far=30.0, seed=3):
     """200 scans of 9 beams: real returns spread over 0.5-``far`` m, then the readings ``codes`` put into them."""
     rng = np.random.default_rng(seed)

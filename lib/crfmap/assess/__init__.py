@@ -4,8 +4,12 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 
 - :mod:`crfmap.assess.metrics`: ``evaluate``, ``Report``, ``mse``, ``confusion``, ``roc_curve``, ``auc``
 - :mod:`crfmap.assess.crossval`: ``cross_validate``, ``CrossValidation``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean``
-- :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score``, ``compare`` (validation on scans the map never saw)
+- :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score`` (validation on scans the map never saw)
 - :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
+- :mod:`crfmap.assess.navigation`: ``nav_scores``, ``nav2_values``, ``nav2_classes``, ``wall_shape`` (the map as nav2 reads the written trinary file, scored on a scan split)
+- :mod:`crfmap.assess.localisation`: ``localise``, ``compare_localisation`` (maps scored by nav2_amcl's likelihood field on held-out scans)
+- :mod:`crfmap.assess.likelihood_field`: ``LaserModel``, ``LikelihoodField`` (nav2_amcl's laser model, as nav2 computes it)
+- :mod:`crfmap.assess.comparison`: ``compare``, ``method_names`` (every evaluated row of a scan split)
 - :mod:`crfmap.assess.splits`: ``split_by``, ``harder_splits``, ``block_sensitivity`` (temporal and spatial scan splits)
 - :mod:`crfmap.assess.paired`: ``paired_difference``, ``sign_test`` (methods on the same seeds, rooms or folds)
 - :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
@@ -36,12 +40,21 @@ _API = {
     "scan_split": "scansplit",
     "ScanSplit": "scansplit",
     "score": "scansplit",
-    "compare": "scansplit",
+    "compare": "comparison",
+    "method_names": "comparison",
+    "LikelihoodField": "likelihood_field",
     "all_baselines": "baselines",
     "window_mean": "baselines",
     "window_median": "baselines",
     "grey_closing": "baselines",
     "graph_cut": "baselines",
+    "nav_scores": "navigation",
+    "nav2_values": "navigation",
+    "nav2_classes": "navigation",
+    "wall_shape": "navigation",
+    "localise": "localisation",
+    "compare_localisation": "localisation",
+    "LaserModel": "likelihood_field",
     "split_by": "splits",
     "harder_splits": "splits",
     "block_sensitivity": "splits",

@@ -4,6 +4,9 @@ from __future__ import annotations
 import argparse
 import json
 
+from crfmap.assess.baselines import BASELINES
+from crfmap.assess.peers import PEERS
+from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
 from crfmap.errors import InputError
 
 
@@ -27,39 +30,27 @@ def add_parser(sub):
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")
     p.add_argument("--max-range", type=float, default=None, metavar="M",
                    help="CARMEN logs: the laser's maximum range; readings at or beyond it are no-returns "
-                        "(default: the log's PARAM robot_front_laser_max, else crfmap.io.carmen.no_return_rule)")
-    p.add_argument("--preset", default=None, metavar="{certainty,thesis}",
-                   help="the preset to score (default: crfmap.crf.presets.DEFAULT_PRESET, certainty)")
-    p.add_argument("--methods", default="all", help="comma-separated rows to score (default all: raw, logodds, "
-                   "mean3x3, median3x3, closing3x3, thesis, graphcut, the preset, octomap, hilbert); raw is always "
-                   "scored")
+                        "(default: the log's PARAM robot_front_laser_max, else crfmap.io.no_return.no_return_rule)")
+    p.add_argument("--preset", default=None, choices=list(PRESETS), metavar="{" + ",".join(PRESETS) + "}",
+                   help=f"the preset to score, with its own solver settings (default {DEFAULT_PRESET})")
+    p.add_argument("--methods", default="all", help="comma-separated rows to score (default all: "
+                   + ", ".join(list(BASELINES) + ["the preset"] + list(PEERS)) + "); raw is always scored")
     p.add_argument("--parity", type=int, default=0, choices=[0, 1], help="build from even (0) or odd (1) scans")
     p.add_argument("--boot", type=int, default=200, help="bootstrap resamples (0: no intervals)")
     p.add_argument("--block", type=int, default=16, help="bootstrap block side in cells")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap")
     p.add_argument("--group", default="all", choices=["all", "seen", "unseen"], help="cells to tabulate")
     p.add_argument("--no-nav", dest="nav", action="store_false", help="skip the navigation metrics and tables")
+    p.add_argument("--no-localisation", dest="localisation", action="store_false",
+                   help="skip localisation on each map (nav2_amcl's likelihood field scored on the held-out scans)")
     p.add_argument("--json", action="store_true", help="print the full scores as one JSON object")
     return p
 
 
-def _methods(text, preset):
-    from crfmap.assess.baselines import BASELINES
-    from crfmap.assess.peers import PEERS
-
-    known = list(BASELINES) + [preset] + list(PEERS)
-    if text.strip() == "all":
-        return known
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    unknown = [n for n in names if n not in known]
-    if unknown or not names:
-        raise InputError("--methods", f"unknown row(s) {', '.join(unknown) or '(none given)'}; known: {', '.join(known)}")
-    return ["raw"] + [n for n in names if n != "raw"]
-
-
 def run(args: argparse.Namespace) -> int:
     from crfmap.assess.calibration import split_calibration
-    from crfmap.assess.scansplit import compare, scan_split, table_rows
+    from crfmap.assess.comparison import compare, parse_methods, table_rows
+    from crfmap.assess.scansplit import scan_split
     from crfmap.commands.build import load_recording
     from tabulate import tabulate
 
@@ -69,14 +60,14 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--block", f"must be a positive number of cells, got {args.block}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be positive, got {args.resolution}")
-    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+    from crfmap.crf.presets import get_preset
 
     args.preset = DEFAULT_PRESET if args.preset is None else args.preset
     try:
         get_preset(args.preset)
     except InputError as e:
         raise InputError("--preset", e.problem) from None
-    methods = _methods(args.methods, args.preset)
+    methods = parse_methods(args.methods, args.preset)
     rec = load_recording(args.input, max_range=args.max_range)
     split = scan_split(rec.scans, args.resolution, parity=args.parity)
     scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed, methods=methods,
@@ -84,6 +75,11 @@ def run(args: argparse.Namespace) -> int:
     beliefs = scores.pop("_beliefs")
     calibration = split_calibration(split, beliefs, group=args.group)
     scores["_ece"] = {name: c["ece"] for name, c in calibration.items()}
+    if args.localisation:
+        from crfmap.assess.localisation import compare_localisation
+
+        scores["_localisation"] = compare_localisation(beliefs, split.resolution, split.origin, split.second_scans,
+                                                       n_boot=args.boot, seed=args.seed)
     if args.json:
         print(json.dumps(_finite(scores)))
         return 0
@@ -98,7 +94,35 @@ def run(args: argparse.Namespace) -> int:
         print("peer wall time: " + ", ".join(f"{n} {s:.1f} s" for n, s in scores["_seconds"].items()))
     if "_nav" in scores:
         print(nav_tables(scores["_nav"], args.group), end="")
+    if "_localisation" in scores:
+        print(localisation_table(scores["_localisation"]), end="")
     return 0
+
+
+LOCALISATION_COLUMNS = (("beats_offsets", "beats offsets %", 100, 1), ("log_margin", "log margin", 1, 3),
+                        ("translation_error", "error [cm]", 100, 1), ("rotation_error", "error [deg]", 1, 2),
+                        ("found", "found %", 100, 1))
+
+
+def localisation_table(loc: dict) -> str:
+    """AMCL's likelihood field on each map, scored on the held-out scans, with the paired interval to raw."""
+    from tabulate import tabulate
+
+    rows = []
+    for name, entry in loc.items():
+        row = [name]
+        for metric, _, scale, digits in LOCALISATION_COLUMNS:
+            value = entry[metric] * scale
+            lo, hi = (v * scale for v in entry.get(metric + "_diff_ci", (float("nan"), float("nan"))))
+            row.append(f"{value:.{digits}f}" + ("" if name == "raw" or lo != lo else f" {lo:+.{digits}f}..{hi:+.{digits}f}"))
+        rows.append(row)
+    first = next(iter(loc.values()))
+    head = (f"localisation on each map (nav2_amcl's likelihood field): {first['scans']} held-out scans at their "
+            "corrected poses against\n5-30 cm / 2-10 deg offsets (beats offsets, log margin); a pose search from "
+            "30 cm / 10 deg off (median error, found:\nwithin 10 cm and 3 deg), each with the paired 95% interval of "
+            "its difference to raw\n")
+    return head + tabulate(rows, ["method"] + [t for _, t, _, _ in LOCALISATION_COLUMNS], tablefmt="github",
+                           disable_numparse=True) + "\n"
 
 
 NAV_COLUMNS = (("lethal_recall", "lethal recall"), ("lethal_precision", "lethal precision"),
@@ -106,14 +130,14 @@ NAV_COLUMNS = (("lethal_recall", "lethal recall"), ("lethal_precision", "lethal 
 
 
 def _percent(entry, metric, interval=True):
-    """``"70.56 +7.41..+9.30"``: the metric in percent and its paired interval to raw in percentage points."""
+    """``"70.56 +7.4..+9.3"``: the metric in percent and its paired interval to raw in percentage points."""
     value = entry[metric]
     if value != value:  # no cells to divide by (e.g. the raw grid's lethal precision in never-seen cells)
         return "-"
     lo, hi = entry.get(metric + "_diff_ci", (float("nan"), float("nan")))
     if not interval or lo != lo:  # the reference row, no intervals (--boot 0), or no resample had the cells
         return f"{100 * value:.2f}"
-    return f"{100 * value:.2f} {100 * lo:+.2f}..{100 * hi:+.2f}"
+    return f"{100 * value:.2f} {100 * lo:+.1f}..{100 * hi:+.1f}"
 
 
 def _fixed(value, digits):
@@ -133,8 +157,8 @@ def nav_tables(nav: dict, group: str) -> str:
     first = (f"nav2's reading of the written trinary map, {group} cells. Recall, misses: % of the held-out occupied "
              "cells;\nprecision: % of the held-out cells called lethal; ghosts: % of the cells passed twice, never hit; "
              "each with\nthe paired 95% interval of its difference to raw [percentage points]\n")
-    shape_header = ["method", "wall thickness [cells]", "lethal pieces / 10 m", "lethal cells",
-                    "never-seen, called free", "of them occupied"]
+    shape_header = ["method", "thickness [cells]", "pieces / 10 m", "lethal cells", "never-seen called free",
+                    "of them occupied"]
     shape_rows = [[name, _fixed(m["thickness"], 2), _fixed(m["components_per_10m"], 1), m["lethal_cells"],
                    m["unknown_free"], m["unknown_free_occupied"]] for name, m in ((n, e["map"]) for n, e in nav.items())]
     second = ("walls of the whole map: lethal cells per cell of skeleton length, 8-connected lethal pieces; cells the "

@@ -362,5 +362,5 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
 
 __all__ = [
     "MAP_MODES", "OCCUPIED_THRESH_DEFAULT", "FREE_THRESH_DEFAULT", "read_map_yaml", "load_map",
-    "save_map", "map_yaml_text", "grid_from_values",
+    "save_map", "map_yaml_text", "grid_from_values", "pixels_from_occupancy",
 ]

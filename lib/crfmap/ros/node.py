@@ -43,6 +43,7 @@ IDLE_SECONDS = 0.1  # longest wait for messages between two looks at the stop fl
 def refine_grid(grid):
     """The default preset's refinement of ``grid``: what ``crfmap infer IN OUT`` computes with its defaults.
 
+    >>> import numpy as np
     >>> from crfmap.grid import OccupancyGrid
     >>> g = OccupancyGrid(np.array([[0.5, 1.0, 0.0, 0.5]]))
     >>> refine_grid(g).shape

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.checks import check_int
-from crfmap.crf.model.presets import DEFAULT_PRESET, get_preset, temper
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset, temper
 from crfmap.errors import InputError
 from crfmap.mapping.builder import HitCounter
 from crfmap.mapping.octomap import OctoMapUpdater

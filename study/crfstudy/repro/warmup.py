@@ -31,7 +31,7 @@ from pathlib import Path
 
 # the distributions the tasks import (tests/repro/test_warmup.py checks it): `make venv` installs these first, then
 # warms the cache while pip installs the rest (run as a script, ``--requirements`` names them with pyproject's versions)
-NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm")
+NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm", "scipy")
 # numba modules with cache=True the LBP calls use
 KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf/engine/messages.py",
                   "crf/inference/_plain_kernels.py")
@@ -48,7 +48,7 @@ def requirements(pyproject=CHECKOUT / "pyproject.toml") -> list[str]:
     """The requirement strings of :data:`NEEDS` as ``pyproject`` states them (one place for the versions).
 
     >>> [r.split(">")[0] for r in requirements()]
-    ['numpy', 'numba', 'pyyaml', 'pillow', 'tqdm']
+    ['numpy', 'numba', 'pyyaml', 'pillow', 'tqdm', 'scipy']
     """
     import re
     import tomllib
@@ -241,6 +241,14 @@ def _scoring():
     score(split, {"raw": split.raw_probability()}, n_boot=2, block=1)
 
 
+def _closed_loop():
+    """The closed loop's planner and costmap (notebook 11): a short exploration of a small thesis scene."""
+    from crfmap.sim.exploration import ExploreSettings, explore
+    from crfmap.world.scenes import enclosed_boxes
+
+    explore(enclosed_boxes("train", size=20), "raw", ExploreSettings(max_scans=3, robot_radius=None))
+
+
 def _gibbs():
     """The background chapter's Gibbs sampler (notebook 01): chains and lattices share one kernel."""
     from crfstudy.experiments.background import gibbs_ising
@@ -270,6 +278,7 @@ def all_tasks() -> dict:
         "bandwidth": (_bandwidth, 0.5),
         "scoring": (_scoring, 1.5),
         "gibbs": (_gibbs, 0.5),
+        "closed loop": (_closed_loop, 3.0),
     }
     for name in SETTINGS:
         if name != "checkerboard":  # the checkerboard tasks above run it, fast and plain kernels

@@ -1,0 +1,104 @@
+"""Every evaluated method on one scan split: the rows ``crfmap evaluate`` prints and the notebooks tabulate.
+
+The rows are read from the registries of the methods, never typed again: the baselines
+(:data:`crfmap.assess.baselines.BASELINES`), any preset (:data:`crfmap.crf.presets.PRESETS`) and the published peers
+(:data:`crfmap.assess.peers.PEERS`). A new baseline or peer is one entry in its registry (and its tests); the CLI's
+``--methods`` choices, the paired comparisons and the navigation tables follow from :func:`method_names`.
+"""
+from __future__ import annotations
+
+from crfmap.assess.baselines import BASELINES, all_baselines
+from crfmap.assess.navigation import nav_scores
+from crfmap.assess.peers import PEERS, peer_rows
+from crfmap.assess.scansplit import DEFAULT_BLOCK, ScanSplit, score
+from crfmap.crf.presets import DEFAULT_PRESET, PRESETS, get_preset
+from crfmap.errors import InputError
+
+
+def method_names(preset: str = DEFAULT_PRESET) -> list:
+    """Every row that can be scored, in table order: the baselines, ``preset``, the peers.
+
+    >>> method_names()[:2], method_names()[-2:]
+    (['raw', 'logodds'], ['octomap', 'hilbert'])
+    """
+    if preset not in PRESETS:
+        raise InputError("preset", f"must be one of {', '.join(PRESETS)}, got {preset!r}")
+    return list(BASELINES) + [preset] + list(PEERS)
+
+
+def parse_methods(text: str, preset: str = DEFAULT_PRESET) -> list:
+    """The rows a ``--methods`` text asks for (``"all"`` or comma-separated names); ``raw`` is always first.
+
+    >>> parse_methods("octomap")
+    ['raw', 'octomap']
+    """
+    known = method_names(preset)
+    if text.strip() == "all":
+        return known
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise InputError("--methods", f"unknown row(s) {', '.join(unknown) or '(none given)'}; known: {', '.join(known)}")
+    return ["raw"] + [n for n in names if n != "raw"]
+
+
+def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, block: int = DEFAULT_BLOCK,
+            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None, nav: bool = True) -> dict:
+    """Score the baselines (:func:`crfmap.assess.baselines.all_baselines`), ``preset`` and peers on a split.
+
+    ``methods``: the rows to score, by name (baselines, ``preset``, the published peers of
+    :data:`crfmap.assess.peers.PEERS`); None means every baseline and the preset (no peers).
+    ``"raw"`` is always scored, as the paired reference. Returns the :func:`crfmap.assess.scansplit.score` dictionary;
+    the preset's LBP result summary is under ``"_lbp"``, each peer's wall time [s] under
+    ``"_seconds"``, every other row's paired Brier and log-loss differences to the preset under
+    ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``); ``keep_beliefs``: every
+    scored ``{name: P}`` under ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more
+    ``{name: P}`` rows. ``nav`` (default): every row read the way nav2 reads the written trinary map, scored with
+    :func:`crfmap.assess.navigation.nav_scores` against the raw grid on the same resamples, under ``"_nav"``
+    (``{name: {group: {metric, metric_ci, metric_diff, metric_diff_ci}, "map": {...}}}``).
+    """
+    wanted = list(BASELINES) + [preset] if methods is None else list(methods)
+    unknown = [m for m in wanted if m not in method_names(preset)]
+    if unknown:
+        raise InputError("methods", f"unknown row(s) {', '.join(unknown)}; known: {', '.join(method_names(preset))}")
+    predictions = all_baselines(split, names=[m for m in wanted if m in BASELINES])
+    out_lbp = None
+    if preset in wanted:
+        result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes)  # as users run it
+        predictions[preset] = result.beliefs.probability
+        out_lbp = {"converged": result.converged, "iterations": result.iterations, "last_change": result.last_change}
+    peers, seconds = peer_rows(split, [m for m in wanted if m in PEERS])
+    predictions.update(peers)
+    predictions.update(extra or {})
+    out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
+    if nav:
+        out["_nav"] = nav_scores(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw",
+                                 scores=out)
+    if out_lbp is not None:
+        out["_lbp"] = out_lbp
+    if seconds:
+        out["_seconds"] = seconds
+    if preset in predictions and len(predictions) > 1:  # every row against the preset, on the same resamples
+        versus = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference=preset,
+                       metrics=("brier", "logloss"))
+        out["_vs_preset"] = {name: {g: {k: v for k, v in entry.items() if "_diff" in k} for g, entry in groups.items()}
+                             for name, groups in versus.items() if name != preset}
+    if keep_beliefs:
+        out["_beliefs"] = predictions
+    return out
+
+
+def table_rows(scores: dict, group: str = "all", metrics=("brier", "logloss", "auc", "wall_recall")) -> list:
+    """Rows ``[name, metric, "lo-hi", ...]`` of a :func:`crfmap.assess.scansplit.score` result for one group (for a table)."""
+    rows = []
+    for name, groups in scores.items():
+        if name.startswith("_"):
+            continue
+        entry = groups[group]
+        row = [name]
+        for m in metrics:
+            row.append(entry[m])
+            lo, hi = entry.get(m + "_ci", (float("nan"), float("nan")))
+            row.append(f"{lo:.4f}-{hi:.4f}")
+        rows.append(row)
+    return rows
