@@ -101,7 +101,7 @@ def test_the_temperature_fits_log_loss_is_sklearns():
     from sklearn.metrics import log_loss
 
     from crfmap.assess.calibration import _logloss
-    from crfmap.crf.model.presets import LOGIT_FLOOR
+    from crfmap.crf.presets import LOGIT_FLOOR
 
     rng = np.random.default_rng(5)
     p = rng.choice([0.0, 0.2, 0.5, 0.9, 1.0], 1000)
