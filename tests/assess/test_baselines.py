@@ -58,3 +58,29 @@ def test_window_median_equals_numpys_nanmedian_of_each_window():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-unknown windows
         want = np.array([[np.nanmedian(padded[y:y + 3, x:x + 3]) for x in range(23)] for y in range(17)])
     np.testing.assert_array_equal(window_median(p), np.where(np.isnan(want), 0.5, want))
+
+
+def _replacement_cases():
+    """Grids of every small shape (1 x n and n x 1 included), with ties, exact 0 / 1 and all-unknown windows."""
+    for seed in range(60):
+        rng = np.random.default_rng(100 + seed)
+        shape = tuple(int(n) for n in rng.integers(1, 13, 2))
+        p = rng.uniform(0, 1, shape)
+        if seed % 2:
+            p = rng.choice([0.0, 0.1, 0.3, 0.7, 0.9, 1.0], size=shape)
+        p[rng.uniform(size=shape) < rng.uniform(0, 0.9)] = 0.5
+        yield p
+    yield np.full((4, 3), 0.5)
+    yield np.array([[0.25]])
+
+
+def test_window_filters_give_the_hand_written_filters_numbers_bit_for_bit():
+    """scipy.ndimage / np.nanmedian in place of the 3x3 window stack they replaced (tests/naive_replaced.py)."""
+    import naive_replaced as old
+
+    for p in _replacement_cases():
+        for new, reference in ((window_mean, old.window_mean), (window_median, old.window_median),
+                               (grey_closing, old.grey_closing)):
+            got, want = new(p), reference(p)
+            assert got.dtype == want.dtype == np.float64
+            np.testing.assert_array_equal(got, want, err_msg=f"{new.__name__} on {p.shape}")

@@ -74,3 +74,38 @@ def test_split_temperature_recovers_a_known_temperature_of_the_preset():
     assert fit_split_temperature(sp, p, group="seen") == pytest.approx(known, rel=0.05)
     with pytest.raises(InputError, match="shape"):
         fit_split_temperature(sp, p[:10])
+
+
+def test_reliability_agrees_with_sklearns_calibration_curve_off_the_bin_edges():
+    """sklearn's calibration_curve on the same equal-width bins gives the same shares and mean P where no P lies on a
+    bin edge; on an edge it puts P in the bin below (P = 0.5, an unknown cell, in [0.4, 0.5] of 10 bins, where
+    reliability and the ECE put it in [0.5, 0.6)), so it does not replace reliability."""
+    from sklearn.calibration import calibration_curve
+
+    rng = np.random.default_rng(4)
+    p = rng.uniform(0, 1, 5000)
+    y = (rng.uniform(0, 1, p.size) < p).astype(float)
+    r = reliability(p, y, bins=10)
+    share, mean_p = calibration_curve(y, p, n_bins=10)
+    used = r["count"] > 0
+    np.testing.assert_allclose(r["share"][used], share, rtol=1e-12)
+    np.testing.assert_allclose(r["mean_p"][used], mean_p, rtol=1e-12)
+    on_edge = np.array([0.5, 0.5, 0.1])
+    assert reliability(on_edge, np.array([1, 0, 0]), bins=10)["count"][5] == 2
+    assert calibration_curve(np.array([1, 0, 0]), on_edge, n_bins=10)[1].tolist() == [0.1, 0.5]  # the same cells
+
+
+def test_the_temperature_fits_log_loss_is_sklearns():
+    """The fit's log-loss is sklearn.metrics.log_loss of the clipped P (kept as three numpy lines: the fit calls it
+    some 40 times, and sklearn's input checks make each call about 6 times slower)."""
+    from sklearn.metrics import log_loss
+
+    from crfmap.assess.calibration import _logloss
+    from crfmap.crf.presets import LOGIT_FLOOR
+
+    rng = np.random.default_rng(5)
+    p = rng.choice([0.0, 0.2, 0.5, 0.9, 1.0], 1000)
+    p[::3] = rng.uniform(0, 1, p[::3].size)
+    y = (rng.uniform(0, 1, p.size) < 0.4).astype(float)
+    assert _logloss(p, y) == pytest.approx(log_loss(y, np.clip(p, LOGIT_FLOOR, 1 - LOGIT_FLOOR), labels=[0, 1]),
+                                           rel=1e-12)

@@ -230,3 +230,21 @@ def test_leave_one_out_refuses_unknown_and_outside_cells():
         leave_one_out(p, unknown[None], neighbour_predictor(1))
     with pytest.raises(InputError, match="^cells: .*outside"):
         leave_one_out(p, np.array([[99, 0]]), neighbour_predictor(1))
+
+
+def test_neighbour_mean_is_scipys_window_correlation_to_rounding():
+    """scipy.ndimage.correlate sums each window directly; the summed-area table of neighbour_mean rounds differently
+    (a mean that is exactly 0.5 can come out a hair off it), so the library would change the cross-validation's
+    numbers and the table stays: the two agree to rounding."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(7)
+    p = rng.choice([0.05, 0.1, 0.3, 0.5, 0.5, 0.7, 0.9, 0.95], size=(31, 37))
+    for radius in (1, 2, 3):
+        ring = np.ones((2 * radius + 1,) * 2)
+        ring[radius, radius] = 0.0  # the cell itself is left out
+        known = (p != 0.5).astype(float)
+        total = ndimage.correlate(p * known, ring, mode="constant", cval=0.0)
+        count = ndimage.correlate(known, ring, mode="constant", cval=0.0)
+        want = np.where(count > 0, total / np.maximum(count, 1), 0.5)
+        np.testing.assert_allclose(neighbour_mean(p, radius).probability, want, rtol=0, atol=1e-12)

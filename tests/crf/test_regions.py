@@ -33,3 +33,16 @@ def test_near_cells_is_the_chebyshev_dilation_and_near_known_of_the_grid(margin)
 def test_near_cells_refuses_bad_input(mask, margin, word):
     with pytest.raises(InputError, match=word):
         near_cells(mask, margin)
+
+
+def test_near_cells_is_scipys_square_dilation():
+    """scipy.ndimage's maximum filter computes the same mask; the shifted ORs stay in the library because they are
+    about ten times faster (near_cells is on the default preset's path: 3.5 ms against 36 ms at 2000^2, margin 5)."""
+    from scipy import ndimage
+
+    for seed in range(40):
+        rng = np.random.default_rng(seed)
+        mask = rng.random(tuple(rng.integers(1, 30, 2))) < rng.uniform(0, 0.2)
+        margin = int(rng.integers(0, 12))
+        want = ndimage.maximum_filter(mask, size=2 * margin + 1, mode="constant", cval=False)
+        np.testing.assert_array_equal(near_cells(mask, margin), want)

@@ -16,19 +16,17 @@
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+from scipy import ndimage
 
 from crfmap.errors import InputError
 from crfmap.assess.mincut import graph_cut_map
 from crfmap.grid import UNKNOWN
 
-
-def _windows(p, fill):
-    """The 9 shifted copies of ``p`` (3x3 window, edges padded with ``fill``): shape (9, H, W)."""
-    h, w = p.shape
-    padded = np.full((h + 2, w + 2), fill, dtype=np.float64)
-    padded[1:-1, 1:-1] = p
-    return np.stack([padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)])
+_WINDOW = np.ones((3, 3))  # the 3x3 window of the window filters
 
 
 def _check(p):
@@ -41,33 +39,32 @@ def _check(p):
 def window_mean(grid) -> np.ndarray:
     """Mean P of the observed (P != 0.5) cells in each cell's 3x3 window; 0.5 where there are none."""
     p = _check(grid)
-    win = _windows(np.where(p == UNKNOWN, np.nan, p), np.nan)
-    known = np.isfinite(win)
-    n = known.sum(axis=0)
-    total = np.where(known, win, 0.0).sum(axis=0)
+    known = p != UNKNOWN
+    # sums of the window in row-major order from 0, cells outside the grid adding 0 (unobserved): one correlation
+    total = ndimage.correlate(np.where(known, p, 0.0), _WINDOW, mode="constant", cval=0.0)
+    n = ndimage.correlate(known.astype(np.float64), _WINDOW, mode="constant", cval=0.0)
     return np.where(n > 0, total / np.maximum(n, 1), UNKNOWN)
 
 
 def window_median(grid) -> np.ndarray:
-    """Median P of the observed cells in each cell's 3x3 window; 0.5 where there are none.
+    """Median P of the observed cells in each cell's 3x3 window (np.nanmedian); 0.5 where there are none.
 
     >>> window_median(np.array([[0.9, 0.1, 0.2]])).round(3).tolist()
     [[0.5, 0.2, 0.15]]
     """
     p = _check(grid)
-    win = np.sort(_windows(np.where(p == UNKNOWN, np.nan, p), np.nan), axis=0)  # NaN (unknown) sorts last
-    n = np.isfinite(win).sum(axis=0)
-    # the middle one (odd n) or the mean of the middle two (even n) of the n known values: np.nanmedian's value
-    low = np.take_along_axis(win, np.maximum(n - 1, 0)[None] // 2, axis=0)[0]
-    high = np.take_along_axis(win, (n // 2)[None], axis=0)[0]
-    return np.where(n > 0, np.where(n % 2 == 1, high, (low + high) / 2), UNKNOWN)
+    # no scipy filter skips unknown cells (generic_filter with np.nanmedian does, 15x slower): numpy's windows
+    padded = np.pad(np.where(p == UNKNOWN, np.nan, p), 1, constant_values=np.nan)
+    windows = sliding_window_view(padded, _WINDOW.shape).reshape(p.shape + (_WINDOW.size,))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # "All-NaN slice": no observed cell, 0.5 below
+        median = np.nanmedian(windows, axis=-1)
+    return np.where(np.isnan(median), UNKNOWN, median)
 
 
 def grey_closing(grid) -> np.ndarray:
     """3x3 grey-level closing of P: dilation (maximum) then erosion (minimum); edges replicate."""
-    p = _check(grid)
-    dilated = _windows(p, -np.inf).max(axis=0)
-    return _windows(dilated, np.inf).min(axis=0)
+    return ndimage.grey_closing(_check(grid), size=_WINDOW.shape, mode="nearest")
 
 
 def graph_cut(observation, hidden, region=None) -> np.ndarray:

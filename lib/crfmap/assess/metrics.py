@@ -4,7 +4,8 @@
 - Precision = TP / (TP + FP), recall = TP / (TP + FN), accuracy = (TP + TN) / all, positive class
   = occupied, a cell predicted occupied if P > 0.5, counted only over cells whose prediction is
   not exactly 0.5 (unknown). (The thesis's eq. 12 and 13 swap precision and recall.)
-- ROC by sweeping the threshold over every distinct predicted value; AUC by the trapezoid rule.
+- ROC by sweeping the threshold over every distinct predicted value; AUC by the trapezoid rule
+  (:func:`sklearn.metrics.roc_curve` keeping every point, :func:`sklearn.metrics.auc`).
 """
 from __future__ import annotations
 
@@ -103,18 +104,12 @@ def roc_curve(pred, truth, mask=None, include_unknown=True):
         keep = p != UNKNOWN
         p, t = p[keep], t[keep]
     pos = t > 0.5
-    n_pos, n_neg = int(pos.sum()), int((~pos).sum())
-    if n_pos == 0 or n_neg == 0:
+    if pos.all() or not pos.any():
         raise InputError("truth", "ROC needs both occupied and empty cells in the truth")
-    order = np.argsort(-p, kind="stable")
-    p_sorted, pos_sorted = p[order], pos[order]
-    tp = np.cumsum(pos_sorted)
-    fp = np.cumsum(~pos_sorted)
-    last_of_value = np.r_[np.flatnonzero(np.diff(p_sorted)), p_sorted.size - 1]
-    tpr = np.r_[0.0, tp[last_of_value] / n_pos]
-    fpr = np.r_[0.0, fp[last_of_value] / n_neg]
-    thresholds = np.r_[np.inf, p_sorted[last_of_value]]
-    return fpr, tpr, thresholds
+    from sklearn.metrics import roc_curve as sklearn_roc_curve  # here: a second to import, mse and confusion need none
+
+    # every distinct P a threshold (drop_intermediate=False): the points the trapezoid of auc sums over
+    return sklearn_roc_curve(pos, p, pos_label=True, drop_intermediate=False)
 
 
 def auc(pred, truth, mask=None, include_unknown=True) -> float:
@@ -123,8 +118,10 @@ def auc(pred, truth, mask=None, include_unknown=True) -> float:
     >>> auc([[0.9, 0.8, 0.3, 0.1]], [[1, 0, 1, 0]])
     0.75
     """
+    from sklearn.metrics import auc as trapezoid_area
+
     fpr, tpr, _ = roc_curve(pred, truth, mask, include_unknown)
-    return float(np.trapezoid(tpr, fpr)) if hasattr(np, "trapezoid") else float(np.trapz(tpr, fpr))
+    return float(trapezoid_area(fpr, tpr))
 
 
 @dataclass
