@@ -16,7 +16,6 @@
 """
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -47,19 +46,20 @@ def window_mean(grid) -> np.ndarray:
 
 
 def window_median(grid) -> np.ndarray:
-    """Median P of the observed cells in each cell's 3x3 window (np.nanmedian); 0.5 where there are none.
+    """Median P of the observed cells in each cell's 3x3 window (np.nanmedian's value); 0.5 where there are none.
 
     >>> window_median(np.array([[0.9, 0.1, 0.2]])).round(3).tolist()
     [[0.5, 0.2, 0.15]]
     """
     p = _check(grid)
-    # no scipy filter skips unknown cells (generic_filter with np.nanmedian does, 15x slower): numpy's windows
+    # no scipy filter skips unknown cells (generic_filter with np.nanmedian does, 15x slower; np.nanmedian over the
+    # windows 8x slower): sort each window, NaN (unknown) last, and take the middle of its n known values
     padded = np.pad(np.where(p == UNKNOWN, np.nan, p), 1, constant_values=np.nan)
-    windows = sliding_window_view(padded, _WINDOW.shape).reshape(p.shape + (_WINDOW.size,))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # "All-NaN slice": no observed cell, 0.5 below
-        median = np.nanmedian(windows, axis=-1)
-    return np.where(np.isnan(median), UNKNOWN, median)
+    win = np.sort(sliding_window_view(padded, _WINDOW.shape).reshape(p.shape + (_WINDOW.size,)), axis=-1)
+    n = np.isfinite(win).sum(axis=-1)
+    low = np.take_along_axis(win, (np.maximum(n - 1, 0) // 2)[..., None], axis=-1)[..., 0]
+    high = np.take_along_axis(win, (n // 2)[..., None], axis=-1)[..., 0]
+    return np.where(n > 0, np.where(n % 2 == 1, high, (low + high) / 2), UNKNOWN)
 
 
 def grey_closing(grid) -> np.ndarray:
