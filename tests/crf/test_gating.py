@@ -25,7 +25,9 @@ def slow_gate(p, hits, passes, free_evidence=2, lethal_evidence=2, line_hits=Tru
     walls = seen & (x >= 1)
     for y in range(p.shape[0]):
         for c in range(p.shape[1]):
-            if not seen[y, c]:  # belief times the prior, in odds
+            gap = any(_at(walls, y + a[0], c + a[1]) and _at(walls, y + b[0], c + b[1]) for a, b in OPPOSITE_PAIRS)
+            off_line = not seen[y, c] and not (wall_lines and gap)
+            if off_line:  # belief times the prior, in odds
                 odds = out[y, c] / (1 - out[y, c]) * unobserved_prior / (1 - unobserved_prior)
                 out[y, c] = odds / (1 + odds)
             if not x[y, c] <= -free_evidence and out[y, c] < UNKNOWN_FLOOR:
@@ -33,8 +35,7 @@ def slow_gate(p, hits, passes, free_evidence=2, lethal_evidence=2, line_hits=Tru
             on_line = any(_at(walls, y + dy, c + dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx)
             if x[y, c] >= lethal_evidence or (line_hits and walls[y, c] and on_line):
                 out[y, c] = max(out[y, c], OCCUPIED_THRESHOLD)
-            gap = any(_at(walls, y + a[0], c + a[1]) and _at(walls, y + b[0], c + b[1]) for a, b in OPPOSITE_PAIRS)
-            if not seen[y, c] and not (wall_lines and gap) and out[y, c] > UNKNOWN_CEILING:
+            if off_line and out[y, c] > UNKNOWN_CEILING:
                 out[y, c] = UNKNOWN_CEILING
     return out
 
@@ -107,6 +108,8 @@ def test_the_prior_moves_only_never_observed_cells_and_keeps_them_unknown():
     assert gated[0, 0] == pytest.approx(0.2) and gated[0, 2] == pytest.approx(0.7 * 0.2 / (0.7 * 0.2 + 0.3 * 0.8))
     assert gated[0, 1] == 0.1 and gated[0, 3] == 0.3  # observed cells keep their belief
     assert np.all(gated[0, [0, 2]] > FREE_THRESHOLD)
+    hits = np.array([[2, 0, 2]])  # a never-observed cell between two walls keeps its belief
+    assert EvidenceGate(unobserved_prior=0.2).apply(np.array([[0.9, 0.8, 0.9]]), hits, 0 * hits)[0, 1] == 0.8
 
 
 def test_neighbour_masks():
