@@ -105,11 +105,18 @@ def test_the_prior_moves_only_never_observed_cells_and_keeps_them_unknown():
     hits, passes = np.zeros((1, 4), int), np.array([[0, 3, 0, 1]])
     p = np.array([[0.5, 0.1, 0.7, 0.3]])
     gated = EvidenceGate(unobserved_prior=0.2).apply(p, hits, passes)
-    assert gated[0, 0] == pytest.approx(0.2) and gated[0, 2] == pytest.approx(0.7 * 0.2 / (0.7 * 0.2 + 0.3 * 0.8))
+    assert gated[0, 0] == UNKNOWN_FLOOR and gated[0, 2] == pytest.approx(0.7 * 0.2 / (0.7 * 0.2 + 0.3 * 0.8))
     assert gated[0, 1] == 0.1 and gated[0, 3] == 0.3  # observed cells keep their belief
     assert np.all(gated[0, [0, 2]] > FREE_THRESHOLD)
     hits = np.array([[2, 0, 2]])  # a never-observed cell between two walls keeps its belief
     assert EvidenceGate(unobserved_prior=0.2).apply(np.array([[0.9, 0.8, 0.9]]), hits, 0 * hits)[0, 1] == 0.8
+
+
+def test_the_bounds_are_written_unknown_by_map_savers_rounding():
+    from crfmap.grid import OccupancyGrid
+
+    values = OccupancyGrid(np.array([[UNKNOWN_FLOOR, UNKNOWN_CEILING]])).to_int8()[0]
+    assert round(100 * FREE_THRESHOLD) < values[0] and values[1] < round(100 * OCCUPIED_THRESHOLD)
 
 
 def test_neighbour_masks():

@@ -41,7 +41,7 @@ so the map's probabilities (Brier, calibration) stay the CRF's everywhere else.
 >>> p = np.array([[0.10, 0.10, 0.10, 0.90, 0.30]])
 >>> hits, passes = np.array([[0, 0, 0, 3, 0]]), np.array([[5, 1, 0, 0, 0]])
 >>> gate.apply(p, hits, passes).round(3).tolist()   # free kept, x = -1 and unseen raised, x = 3 kept
-[[0.1, 0.2, 0.2, 0.9, 0.3]]
+[[0.1, 0.21, 0.21, 0.9, 0.3]]
 """
 from __future__ import annotations
 
@@ -54,9 +54,10 @@ from crfmap.errors import InputError
 
 FREE_THRESHOLD = 0.196  # nav2 / map_saver (Jazzy): P <= this is free
 OCCUPIED_THRESHOLD = 0.65  # nav2 / map_saver: P >= this is lethal
-# the gate's two bounds sit strictly inside the unknown band, far enough from the thresholds that a map written as
-# an 8-bit image (steps of 1/255 = 0.004) still reads unknown
-UNKNOWN_FLOOR = 0.2
+# The gate's two bounds sit inside the unknown band as nav2's map_saver writes it: a cell's OccupancyGrid value is
+# v = rint(100 P), free when v <= rint(100 * 0.196) = 20 and lethal when v >= 65, so P = 0.2 (v = 20) would be
+# written free; 0.21 (v = 21) and 0.64 (v = 64) are written unknown.
+UNKNOWN_FLOOR = 0.21
 UNKNOWN_CEILING = 0.64
 
 LOGIT_FLOOR = 1e-9  # a belief is clipped to [LOGIT_FLOOR, 1 - LOGIT_FLOOR] before its logit takes the prior
