@@ -1,7 +1,7 @@
 """Evidence gating: what a refined map may say to nav2 about a cell, given that cell's own evidence.
 
 nav2 reads a map in three classes (map_saver's trinary): lethal P >= 0.65, free P <= 0.196, unknown
-between. A planner drives through free cells, so a refinement that calls a cell free which the raw
+between (as written, on v = rint(100 P): lethal v >= 65, free v <= 20). A planner drives through free cells, so a refinement that calls a cell free which the raw
 grid kept lethal or unknown opens a wall; LBP does that wherever a weakly observed cell (a wall face
 passed by grazing beams, a cell seen once) sits next to free space, and it grows walls into space
 no beam reached. An :class:`EvidenceGate` lets the CRF's belief stand where the cell's own evidence
@@ -23,7 +23,6 @@ inside the nearest class the evidence allows:
   of it (east-west, north-south or either diagonal); otherwise its belief is capped just below the
   occupied threshold (:data:`UNKNOWN_CEILING`). Walls then do not grow into space behind them,
   while a gap in a wall is closed.
-
 - **never-observed cells start from the building's rate, not from 0.5**: ``unobserved_prior`` pi
   multiplies the belief of a never-observed cell off every wall line in odds,
   ``logit(P') = logit(P) + logit(pi)``, which is the belief that cell gets with an observation of
