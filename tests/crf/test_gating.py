@@ -6,7 +6,7 @@ import pytest
 
 from crfmap.crf.model.gating import (
     OCCUPIED_THRESHOLD, FREE_THRESHOLD, UNKNOWN_CEILING, UNKNOWN_FLOOR, EvidenceGate, wall_line_gaps, wall_neighbours)
-from crfmap.crf.model.presets import evidence_from_probability, get_preset
+from crfmap.crf.presets import evidence_from_probability, get_preset
 from crfmap.errors import InputError
 
 OPPOSITE_PAIRS = (((0, 1), (0, -1)), ((1, 0), (-1, 0)), ((1, 1), (-1, -1)), ((1, -1), (-1, 1)))

@@ -145,7 +145,7 @@ class EvidenceGate:
         """The gated belief, a new float64 [y, x] array.
 
         Give the cell counts (``hits``, ``passes``), or the signed ``evidence`` x with an ``observed``
-        mask (a map file's P read back by :func:`crfmap.crf.model.presets.evidence_from_probability`;
+        mask (a map file's P read back by :func:`crfmap.crf.presets.evidence_from_probability`;
         then observed = x != 0 unless given).
         """
         p = np.array(probability, dtype=np.float64)
