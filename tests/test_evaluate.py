@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from crfmap.cli import main
+from crfmap.crf.presets import DEFAULT_PRESET as D  # the row of the default preset
 
 
 def _room_log(path, n_scans=8, seed=0):
@@ -34,21 +35,21 @@ def test_evaluate_table_and_json_match_the_library(tmp_path, capsys):
     log = _room_log(tmp_path / "room.log")
     assert main(["evaluate", str(log), "--resolution", "0.1", "--boot", "5"]) == 0
     out = capsys.readouterr().out
-    for name in ("raw", "logodds", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut", "certainty"):
+    for name in ("raw", "logodds", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut", D):
         assert re.search(rf"^\| {name} +\|", out, re.M)
     assert main(["evaluate", str(log), "--resolution", "0.1", "--boot", "5", "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
     expected = compare(scan_split(read_carmen(log).scans, 0.1), n_boot=5)
-    assert got["certainty"]["all"]["brier"] == pytest.approx(expected["certainty"]["all"]["brier"])
+    assert got[D]["all"]["brier"] == pytest.approx(expected[D]["all"]["brier"])
     assert got["raw"]["unseen"]["cells"] == expected["raw"]["unseen"]["cells"]
 
 
 def test_evaluate_methods_select_rows_and_peers_are_in_the_json(tmp_path, capsys):
     log = _room_log(tmp_path / "room.log")
     common = [str(log), "--resolution", "0.1", "--boot", "5"]
-    assert main(["evaluate", *common, "--methods", "certainty,octomap,hilbert"]) == 0
+    assert main(["evaluate", *common, "--methods", f"{D},octomap,hilbert"]) == 0
     out = capsys.readouterr().out
-    for name in ("raw", "certainty", "octomap", "hilbert"):
+    for name in ("raw", D, "octomap", "hilbert"):
         assert re.search(rf"^\| {name} +\|", out, re.M)
     assert not re.search(r"^\| thesis +\|", out, re.M) and "peer wall time: octomap" in out
     assert main(["evaluate", *common, "--methods", "octomap,hilbert", "--json"]) == 0
@@ -58,10 +59,10 @@ def test_evaluate_methods_select_rows_and_peers_are_in_the_json(tmp_path, capsys
     assert set(got["_nav"]) == {"raw", "octomap", "hilbert"}
     assert got["octomap"]["all"]["brier_ci"][0] <= got["octomap"]["all"]["brier"] <= got["octomap"]["all"]["brier_ci"][1]
     assert 0 <= got["_ece"]["hilbert"] <= 1
-    assert main(["evaluate", *common, "--methods", "certainty,octomap", "--json"]) == 0
+    assert main(["evaluate", *common, "--methods", f"{D},octomap", "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
     vs = got["_vs_preset"]["octomap"]["all"]
-    assert vs["brier_diff"] == pytest.approx(got["octomap"]["all"]["brier"] - got["certainty"]["all"]["brier"])
+    assert vs["brier_diff"] == pytest.approx(got["octomap"]["all"]["brier"] - got[D]["all"]["brier"])
     assert main(["evaluate", *common, "--methods", "octomap,nope"]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "--methods" in err and "nope" in err
@@ -85,7 +86,7 @@ def test_evaluate_missing_file(tmp_path, capsys):
 
 def test_evaluate_prints_the_navigation_tables_from_the_json_numbers(tmp_path, capsys):
     log = _room_log(tmp_path / "room.log")
-    common = [str(log), "--resolution", "0.1", "--boot", "5", "--methods", "certainty,mean3x3", "--group", "seen"]
+    common = [str(log), "--resolution", "0.1", "--boot", "5", "--methods", f"{D},mean3x3", "--group", "seen"]
     assert main(["evaluate", *common, "--json"]) == 0
     nav = json.loads(capsys.readouterr().out)["_nav"]
     assert main(["evaluate", *common]) == 0
@@ -95,10 +96,10 @@ def test_evaluate_prints_the_navigation_tables_from_the_json_numbers(tmp_path, c
     assert max(len(line) for line in nav_part.splitlines()) <= 120  # the localisation table too
     first_table = nav_part[:nav_part.index("walls of")]
     rows = {line.split("|")[1].strip(): line for line in first_table.splitlines() if line.startswith("| ")}
-    entry = nav["certainty"]["seen"]
+    entry = nav[D]["seen"]
     recall = f"{100 * entry['lethal_recall']:.2f} {100 * entry['lethal_recall_diff_ci'][0]:+.1f}.."
-    assert recall in rows["certainty"]
+    assert recall in rows[D]
     assert re.search(rf"^\| raw +\| {100 * nav['raw']['seen']['lethal_recall']:.2f} +\| ", out, re.M)
-    assert re.search(rf"\| {nav['certainty']['map']['thickness']:.2f} +\|", out)
+    assert re.search(rf"\| {nav[D]['map']['thickness']:.2f} +\|", out)
     assert main(["evaluate", *common, "--json", "--no-nav"]) == 0
     assert "_nav" not in json.loads(capsys.readouterr().out)

@@ -15,6 +15,7 @@ from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.io.map_server import load_map
 from crfmap.io.nav2_costmap import LETHAL_OBSTACLE, NO_INFORMATION, static_layer_costs
+from crfmap.crf.presets import DEFAULT_PRESET as D  # the row of the default preset
 
 # P on and around every edge of the written file's classes: nav2's 0.65 / 0.196 and the percent rounding
 EDGES = [0.0, 1.0, 0.5, 0.196, 0.2, 0.204, 0.205, 0.2050001, 0.2051, 0.21, 0.64, 0.645, 0.6450001, 0.6451, 0.65,
@@ -219,13 +220,13 @@ def test_skeleton_length_equals_a_loop_over_neighbour_pairs(seed):
 
 def test_compare_scores_every_row_for_navigation_on_the_same_resamples():
     sp = _random_split(11, shape=(24, 24))
-    out = compare(sp, n_boot=10, block=8, seed=2, methods=["raw", "mean3x3", "certainty"])
-    assert set(out["_nav"]) == {"raw", "mean3x3", "certainty"}
+    out = compare(sp, n_boot=10, block=8, seed=2, methods=["raw", "mean3x3", D])
+    assert set(out["_nav"]) == {"raw", "mean3x3", D}
     for name in out["_nav"]:
         assert out["_nav"][name]["all"]["auc_ci"] == out[name]["all"]["auc_ci"]
-    alone = nav_scores(sp, compare(sp, n_boot=0, methods=["raw", "mean3x3", "certainty"], keep_beliefs=True,
+    alone = nav_scores(sp, compare(sp, n_boot=0, methods=["raw", "mean3x3", D], keep_beliefs=True,
                                    nav=False)["_beliefs"], n_boot=10, block=8, seed=2)
-    assert alone["certainty"]["seen"]["miss_rate_diff_ci"] == out["_nav"]["certainty"]["seen"]["miss_rate_diff_ci"]
+    assert alone[D]["seen"]["miss_rate_diff_ci"] == out["_nav"][D]["seen"]["miss_rate_diff_ci"]
     assert "_nav" not in compare(sp, n_boot=0, methods=["raw"], nav=False)
 
 

@@ -5,6 +5,7 @@ import pytest
 from crfmap.assess.scansplit import ScanSplit, scan_split, score, split_scans
 from crfmap.errors import InputError
 from crfmap.mapping.builder import build_grid, count_hits
+from crfmap.crf.presets import DEFAULT_PRESET as D  # the row of the default preset
 
 
 def test_halves_are_the_even_and_odd_scans_on_one_grid(room):
@@ -98,8 +99,8 @@ def test_compare_keeps_the_grids_it_scored_only_when_asked():
     kept = compare(sp, n_boot=0, keep_beliefs=True)
     assert "_beliefs" not in compare(sp, n_boot=0)  # plain results stay JSON-friendly (crfmap evaluate --json)
     np.testing.assert_array_equal(kept["_beliefs"]["raw"], sp.raw_probability())
-    again = score(sp, {"certainty": kept["_beliefs"]["certainty"]}, n_boot=0)["certainty"]["all"]["brier"]
-    assert again == kept["certainty"]["all"]["brier"]
+    again = score(sp, {D: kept["_beliefs"][D]}, n_boot=0)[D]["all"]["brier"]
+    assert again == kept[D]["all"]["brier"]
 
 
 def test_bad_input_is_named():

@@ -61,7 +61,7 @@ def test_trinary_map_values_are_the_strongest_observations():
 def test_unknown_preset_is_named():
     with pytest.raises(InputError, match="preset"):
         get_preset("nope")
-    assert set(PRESETS) == {"thesis", "certainty"}
+    assert set(PRESETS) == {"thesis", "certainty", "gated"}
 
 
 def test_refine_within_bounds_the_senders_and_keeps_the_preset_region():

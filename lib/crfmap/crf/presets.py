@@ -8,7 +8,7 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
   critical coupling ln(1 + sqrt 2) / 2 = 0.44: the CRF is in its ordered phase, so LBP
   erases thin walls and gives never-seen space the state of its border. Use it to reproduce
   the thesis.
-- ``"certainty"`` (the default of ``crfmap infer``): each cell's link strength follows its
+- ``"certainty"``: each cell's link strength follows its
   evidence. A cell's signed evidence is ``x = hits - passes`` (the quantity the thesis's
   arctan model turns into P). Its observation says P(occupied) = ``sigmoid(l)`` with
   ``l = min(a + b (x - 1), limit)`` for x > 0 (``(a, b) = occupied``: the first net hit is
@@ -18,6 +18,16 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
   never seen (x = 0) says nothing. The hidden coupling J is below the critical value, so
   information spreads only a few cells, and LBP runs only within ``margin`` cells of an
   observation: space far from every observation stays exactly 0.5 (unknown).
+
+- ``"gated"`` (:data:`DEFAULT_PRESET`, what every path runs unless told otherwise: ``crfmap infer``,
+  ``crfmap evaluate``, ``crfmap node refine`` and ``node map``, the online mapper): the certainty model at
+  J = 0.30, below LBP's own critical coupling on the square lattice (the Bethe value atanh(1/3) = 0.347; Onsager's
+  0.441 is the exact model's), followed by an evidence gate (:mod:`crfmap.crf.model.gating`) that lets nav2 read a
+  cell free only where its own beams passed it at least twice net (never a cell the raw grid does not call free),
+  keeps repeatedly hit and on-a-wall cells lethal, lets lone hits (ghosts) go, keeps walls from growing into space
+  no beam reached, and gives never-observed cells the building's rate P = 0.25 (still unknown to nav2). Chosen for
+  what a robot does with the map (issue 38: dangerous misses, ghosts, wall thickness, AMCL localisation), where
+  ``certainty`` wins Brier but opens walls and triples their thickness.
 
 ``temperature`` T (default 1: no change) scales the output's log-odds, ``P' = sigmoid(logit(P) / T)``
 (:func:`temper`), applied to the whole refined map: T > 1 softens an over-confident map, T < 1 sharpens
@@ -52,6 +62,7 @@ from numba import njit
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.inference.schedules import SETTINGS
+from crfmap.crf.model.gating import EvidenceGate
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
 from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
@@ -59,7 +70,7 @@ from crfmap.grid import OccupancyGrid
 
 CRITICAL_COUPLING = math.log(1 + math.sqrt(2)) / 2  # square-lattice Ising, J_c = 0.4407
 LOGIT_FLOOR = 1e-6  # P is clipped to [LOGIT_FLOOR, 1 - LOGIT_FLOOR] before its logit is tempered (logit(0) is -inf)
-DEFAULT_PRESET = "certainty"  # what crfmap infer / evaluate run by default (the recommended preset below)
+DEFAULT_PRESET = "gated"  # what every path runs by default: crfmap infer / evaluate, the node, the online mapper
 
 
 def coupling_table(coupling: float) -> np.ndarray:
@@ -179,6 +190,7 @@ class Preset:
     max_iter: int = 1000  # iteration limit
     schedule: str = "checkerboard"  # a name of crfmap.crf.inference.schedules.SETTINGS
     dtype: str = "float64"
+    gate: EvidenceGate | None = None  # what each cell's own evidence lets nav2 read (crfmap.crf.model.gating)
 
     def __post_init__(self):
         object.__setattr__(self, "temperature", _check_temperature(self.temperature))
@@ -270,6 +282,15 @@ class Preset:
         result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
         if own is not None:  # outside the preset's region nothing was inferred: keep the observation
             np.copyto(result.beliefs.probability, unary, where=~own)  # the result's own array: checked, in [0, 1]
+        if self.gate is not None:  # after LBP and the margin: the gate reads each cell's own evidence
+            if hits is not None:
+                gated = self.gate.apply(result.beliefs.probability, hits=hits, passes=passes)
+            else:
+                gated = self.gate.apply(result.beliefs.probability, evidence=evidence_from_probability(g.probability),
+                                        observed=observed)
+            if own is not None:  # outside the preset's region nothing was inferred: the observation (unknown) stays
+                gated = np.where(own, gated, result.beliefs.probability)
+            result.beliefs = result.beliefs.with_probability(gated.astype(result.beliefs.probability.dtype))
         if self.temperature != 1.0:  # the whole output, observation-only cells too
             probability = temper(result.beliefs.probability, self.temperature)
             result.beliefs = result.beliefs.with_probability(probability.astype(result.beliefs.probability.dtype))
@@ -284,6 +305,20 @@ PRESETS = {
         "certainty", "recommended: certainty-scaled observations (link strength follows hits - passes), coupling "
         "below critical, LBP only near observations: improves real maps, keeps walls, leaves unexplored space unknown",
         coupling_table(0.35), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5),
+    # Chosen for navigation (issue 38) on Intel and ACES only, confirmed on the two ROS bags, MIT CSAIL and Freiburg
+    # 101: the certainty model, J and pi fitted by held-out log-loss with occupied cells weighted 3x (dangerous
+    # misses the costlier error) over the scan, temporal and block splits of Intel and ACES on the grid
+    # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.2 .. 0.5}: J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it
+    # converges 2.4x faster than at it for 0.0003 Brier), pi = 0.25 (Intel's isotonic P at x = 0 is 0.248); the gate's
+    # free_evidence = 2 is the point of the measured Brier / dangerous-miss curve where no refined free cell is a cell
+    # the raw grid does not call free. `crfmap evaluate` and notebook 10 score it beside certainty on every metric.
+    "gated": Preset(
+        "gated", "recommended for navigation: the certainty model at J = 0.30 (below LBP's Bethe point), gated by "
+        "each cell's own evidence: free only after two net passes (never a cell the raw grid does not call free), "
+        "repeated or on-a-wall hits stay lethal, lone hits go, walls do not grow into unobserved space, "
+        "never-observed cells at P = 0.25 (still unknown to nav2)",
+        coupling_table(0.30), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5,
+        gate=EvidenceGate(free_evidence=2, lethal_evidence=2, line_hits=True, wall_lines=True, unobserved_prior=0.25)),
 }
 
 

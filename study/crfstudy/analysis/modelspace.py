@@ -23,11 +23,13 @@ from dataclasses import replace
 import numpy as np
 
 from crfmap.assess.scansplit import score
-from crfmap.crf.presets import DEFAULT_PRESET, coupling_table, get_preset
+from crfmap.crf.presets import coupling_table, get_preset
+
+CERTAINTY = "certainty"  # the model whose space is mapped (the gated default is this model plus its evidence gate)
 
 
 def _near(split, margin):
-    preset = get_preset(DEFAULT_PRESET) if margin is None else replace(get_preset(DEFAULT_PRESET), margin=margin)
+    preset = get_preset(CERTAINTY) if margin is None else replace(get_preset(CERTAINTY), margin=margin)
     return preset.region(split.first_hits + split.first_passes > 0)
 
 
@@ -84,7 +86,7 @@ def symmetric_tables(split, couplings, link_strengths, margin=None, group="all",
     return out
 
 
-def scaled_preset(coupling, scale, base=DEFAULT_PRESET):
+def scaled_preset(coupling, scale, base=CERTAINTY):
     """The certainty preset with coupling J and every evidence weight multiplied by ``scale``."""
     p = get_preset(base)
     return replace(p, hidden=coupling_table(coupling), occupied=tuple(scale * v for v in p.occupied),

@@ -55,12 +55,14 @@ ORDER = tuple(GRID)  # the coordinates in the order one round visits them
 START = {"coupling": 0.3, "occupied_first": 1.0, "occupied_further": 0.2, "free_first": 1.0, "free_further": 0.2,
          "limit": 4.0, "margin": 3}
 
+CERTAINTY = "certainty"  # the model searched here (the gated default is this model plus its evidence gate)
+
 
 def preset_constants(preset) -> dict:
     """The seven searched constants of a :class:`~crfmap.crf.presets.Preset`, named as in :data:`GRID`.
 
-    >>> from crfmap.crf.presets import DEFAULT_PRESET, get_preset
-    >>> preset_constants(get_preset(DEFAULT_PRESET))["margin"]
+    >>> from crfmap.crf.presets import get_preset
+    >>> preset_constants(get_preset(CERTAINTY))["margin"]
     5
     """
     return {"coupling": round(preset.coupling, 9), "occupied_first": preset.occupied[0],
@@ -69,13 +71,13 @@ def preset_constants(preset) -> dict:
 
 
 def preset_from(constants: dict, base: str | None = None):
-    """The ``base`` preset (None: ``DEFAULT_PRESET``) with the constants of ``constants`` (names of :data:`GRID`)."""
+    """The ``base`` preset (None: the certainty preset, the model this study is about) with the constants of ``constants`` (names of :data:`GRID`)."""
     from crfmap.crf.presets import coupling_table, get_preset
 
     unknown = set(constants) - set(GRID)
     if unknown:
         raise InputError("constants", f"unknown names {sorted(unknown)}; expected some of {', '.join(GRID)}")
-    p = get_preset() if base is None else get_preset(base)
+    p = get_preset(CERTAINTY) if base is None else get_preset(base)
     c = {**preset_constants(p), **constants}
     return replace(p, hidden=coupling_table(c["coupling"]),
                    occupied=(float(c["occupied_first"]), float(c["occupied_further"])),
