@@ -161,3 +161,20 @@ def test_usage_errors_are_one_line(argv, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "error" in err
+
+
+def test_choices_and_help_come_from_the_registries(capsys):
+    """The CLI lists what the registries hold (a new preset, schedule, baseline or peer appears without a CLI edit)."""
+    from crfmap.assess.baselines import BASELINES
+    from crfmap.assess.peers import PEERS
+    from crfmap.cli import build_parser
+    from crfmap.crf.inference.schedules import SETTINGS
+    from crfmap.crf.presets import PRESETS
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices
+    infer = {a.dest: a for a in sub["infer"]._actions}
+    assert list(infer["preset"].choices) == list(PRESETS) and list(infer["schedule"].choices) == list(SETTINGS)
+    assert all(p.purpose in infer["preset"].help for p in PRESETS.values())
+    evaluate = {a.dest: a for a in sub["evaluate"]._actions}
+    assert list(evaluate["preset"].choices) == list(PRESETS)
+    assert all(name in evaluate["methods"].help for name in list(BASELINES) + list(PEERS))

@@ -84,38 +84,59 @@ def graph_cut(observation, hidden, region=None) -> np.ndarray:
     return out
 
 
-BASELINES = ("raw", "logodds", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut")
+def _logodds(split, raw, thesis_max_iter):
+    """The Probabilistic Robotics log-odds update of the first half's scans (None without them)."""
+    if split.first_scans is None:
+        return None
+    from crfmap.mapping.builder import build_grid
+
+    return build_grid(split.first_scans, split.resolution, bounds=split.bounds, model="logodds").probability
+
+
+def _thesis(split, raw, thesis_max_iter):
+    """LBP with the thesis's tables on the raw grid."""
+    from crfmap.crf.presets import get_preset
+
+    return get_preset("thesis").refine(raw, max_iter=thesis_max_iter).beliefs.probability
+
+
+def _graphcut(split, raw, thesis_max_iter):
+    """The MAP labelling of the thesis's CRF."""
+    from crfmap.crf.presets import get_preset
+
+    return graph_cut(raw, get_preset("thesis").hidden)
+
+
+# The registry of baseline rows: name -> function(split, raw grid, thesis_max_iter) -> [y, x] P (None: not available
+# for this split). crfmap evaluate, compare() and the notebooks read their rows from here (crfmap.assess.comparison):
+# a new baseline is one function and one entry.
+BASELINE_ROWS = {
+    "raw": lambda split, raw, _: raw,
+    "logodds": _logodds,
+    "mean3x3": lambda split, raw, _: window_mean(raw),
+    "median3x3": lambda split, raw, _: window_median(raw),
+    "closing3x3": lambda split, raw, _: grey_closing(raw),
+    "thesis": _thesis,
+    "graphcut": _graphcut,
+}
+BASELINES = tuple(BASELINE_ROWS)
 
 
 def all_baselines(split, thesis_max_iter: int = 1000, names=BASELINES) -> dict:
-    """{name: P} of the baselines ``names`` for a scan split's first half (needs ``split.first_scans`` for log-odds).
+    """{name: P} of the baselines ``names`` (:data:`BASELINE_ROWS`) for a scan split's first half.
 
-    ``raw`` (arctan grid), ``logodds`` (the Probabilistic Robotics update), ``mean3x3``,
+    ``raw`` (arctan grid), ``logodds`` (the Probabilistic Robotics update; needs ``split.first_scans``), ``mean3x3``,
     ``median3x3``, ``closing3x3``, ``thesis`` (LBP with the thesis's tables on the raw grid) and
-    ``graphcut`` (the MAP labelling of the thesis's CRF).
+    ``graphcut`` (the MAP labelling of the thesis's CRF). ``raw`` is always included.
     """
-    from crfmap.crf.presets import get_preset
-
-    unknown = [n for n in names if n not in BASELINES]
+    unknown = [n for n in names if n not in BASELINE_ROWS]
     if unknown:
         raise InputError("baselines", f"unknown baseline(s) {', '.join(unknown)}; known: {', '.join(BASELINES)}")
     raw = split.raw_probability()
     out = {"raw": raw}
-    if split.first_scans is not None and "logodds" in names:
-        from crfmap.mapping.builder import build_grid
-
-        out["logodds"] = build_grid(split.first_scans, split.resolution, bounds=split.bounds,
-                                    model="logodds").probability
-    if "mean3x3" in names:
-        out["mean3x3"] = window_mean(raw)
-    if "median3x3" in names:
-        out["median3x3"] = window_median(raw)
-    if "closing3x3" in names:
-        out["closing3x3"] = grey_closing(raw)
-    if "thesis" in names or "graphcut" in names:
-        thesis = get_preset("thesis")
-        if "thesis" in names:
-            out["thesis"] = thesis.refine(raw, max_iter=thesis_max_iter).beliefs.probability
-        if "graphcut" in names:
-            out["graphcut"] = graph_cut(raw, thesis.hidden)
+    for name in BASELINES:
+        if name != "raw" and name in names:
+            value = BASELINE_ROWS[name](split, raw, thesis_max_iter)
+            if value is not None:
+                out[name] = value
     return out
