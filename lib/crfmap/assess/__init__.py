@@ -3,7 +3,6 @@
 Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 
 - :mod:`crfmap.assess.metrics`: ``evaluate``, ``Report``, ``mse``, ``confusion``, ``roc_curve``, ``auc``
-- :mod:`crfmap.assess.crossval`: ``cross_validate``, ``CrossValidation``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean``
 - :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score`` (validation on scans the map never saw)
 - :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
 - :mod:`crfmap.assess.navigation`: ``nav_scores``, ``nav2_values``, ``nav2_classes``, ``wall_shape`` (the map as nav2 reads the written trinary file, scored on a scan split)
@@ -25,12 +24,6 @@ _API = {
     "confusion": "metrics",
     "roc_curve": "metrics",
     "auc": "metrics",
-    "cross_validate": "crossval",
-    "CrossValidation": "crossval",
-    "leave_one_out": "crossval",
-    "random_folds": "crossval",
-    "block_folds": "crossval",
-    "neighbour_mean": "crossval",
     "learn_thesis": "learning",
     "learn_gradient": "learning",
     "learn_pseudolikelihood": "learning",

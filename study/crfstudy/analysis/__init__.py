@@ -4,5 +4,6 @@
 - :mod:`crfstudy.analysis.peer_search`: the Hilbert map's parameter search
 - :mod:`crfstudy.analysis.ablations`: ``ablation_presets``, ``IsotonicEvidence``, ``PlattRaw``
 - :mod:`crfstudy.analysis.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``scaled_scores``, ``fit_pseudolikelihood``
+- :mod:`crfstudy.analysis.crossval`: ``cross_validate``, ``leave_one_out``, ``random_folds``, ``block_folds``, ``neighbour_mean`` (the office's hidden-cell folds, Table 26)
 - :mod:`crfstudy.analysis.samecells`: ``fold_scores``, ``block_scores`` (every method on the cells all decide)
 """

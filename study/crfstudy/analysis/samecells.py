@@ -77,7 +77,7 @@ def fold_scores(predictions: dict, labels, held_out, folds, reference: str, n_bo
                 seed: int = 0, level: float = 0.95) -> dict:
     """Every prediction on the held-out cells all of them decide, per fold and pooled, paired to ``reference``.
 
-    ``folds``: the fold id of every cell (as :func:`crfmap.assess.crossval.random_folds`), ``held_out``:
+    ``folds``: the fold id of every cell (as :func:`crfstudy.analysis.crossval.random_folds`), ``held_out``:
     the cells held out. Returns ``{"common_cells", "held_out_cells", "folds", "methods": {name: {"pooled",
     "per_fold", metric: {"fold_mean", "fold_ci"}, "vs_reference": {metric: paired_difference}}}}``;
     accuracy-like metrics: higher is better.

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from crfmap.assess.crossval import (
+from crfstudy.analysis.crossval import (
     NOT_IN_A_FOLD,
     block_folds,
     cross_validate,
