@@ -166,6 +166,25 @@ def _write_all(writer, messages, store, serialize):
         writer.write(connections[topic], ns, serialize(msg, msgtype))
 
 
+def clashing_scans(scans: ScanSet, laser_mount=(0.0, 0.0, 0.0)) -> list:
+    """Pairs (i, j) of scans whose stamps are the same nanosecond but whose robot poses differ.
+
+    A bag's tf tree holds one pose per time, so such a recording cannot be written (all-zero or
+    repeated stamps in a log; :func:`crfmap.commands.convert.stamps_from_order` restamps them).
+
+    >>> s = ScanSet(np.ones((3, 1), np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.0, 0, 0], [1, 0, 0], [1, 0, 0]]),
+    ...             np.array([0.0, 0.0, 1.0]))
+    >>> clashing_scans(s)
+    [(0, 1)]
+    """
+    scan_ns = np.array([to_ns(t) for t in scans.stamps], dtype=np.int64)
+    base_at_scans = compose(np.asarray(scans.laser_poses, np.float64), inverse(np.asarray(laser_mount, np.float64)))
+    order = np.argsort(scan_ns, kind="stable")
+    same = np.nonzero(np.diff(scan_ns[order]) == 0)[0]
+    return [(int(order[k]), int(order[k + 1])) for k in same
+            if not np.allclose(base_at_scans[order[k]], base_at_scans[order[k + 1]], atol=1e-9)]
+
+
 def _recording_messages(recording, scans, make):
     """Every message of the bag as (stamp [ns], topic, msgtype, message)."""
     odom = recording.odometry if recording.odometry is not None and len(recording.odometry) else None
@@ -178,13 +197,12 @@ def _recording_messages(recording, scans, make):
         raise InputError("recording", f"laser frame '{laser_frame}' equals the base frame but the laser mount is not zero")
     scan_ns = np.array([to_ns(t) for t in scans.stamps], dtype=np.int64)
     base_at_scans = compose(np.asarray(scans.laser_poses, np.float64), inverse(mount))
-    order = np.argsort(scan_ns, kind="stable")
-    same = np.nonzero(np.diff(scan_ns[order]) == 0)[0]
-    for k in same:
-        i, j = order[k], order[k + 1]
-        if not np.allclose(base_at_scans[i], base_at_scans[j], atol=1e-9):
-            raise InputError("recording", f"scans {i} and {j} share the stamp {scans.stamps[i]!r} s but not "
-                                          "the pose; a tf tree holds one pose per time")
+    clashes = clashing_scans(scans, mount)
+    if clashes:
+        i, j = clashes[0]
+        raise InputError(scans.source or "recording",
+                         f"{len(clashes)} scans share a stamp with another at a different pose (first: scans {i} "
+                         f"and {j}, {float(scans.stamps[i]):.9g} s); a tf tree holds one pose per time")
     scans_in_odom = scans.frame_id == odom_frame
     t0 = int(scan_ns.min())
     out = []
