@@ -205,3 +205,24 @@ def test_infer_keeps_the_olin_maps_unknown_space(tmp_path, capsys):
     unknown_out = _unknown(out)
     # the certainty preset infers within 5 cells of an observation: the rest of the unknown space stays unknown
     assert unknown_in > 1_000_000 and 0.9 * unknown_in < unknown_out <= unknown_in
+
+
+@pytest.mark.slow
+def test_first_infer_on_an_empty_cache_reports_the_compile_apart_from_lbp(tmp_path):
+    """With an empty numba cache the first `crfmap infer` compiles; its line gives the LBP time without it."""
+    import os
+    import re
+    import subprocess
+    import sys
+
+    grid, _ = noisy_grid()
+    save_grid(grid, tmp_path / "in.npy")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    run = subprocess.run([sys.executable, "-m", "crfmap", "infer", str(tmp_path / "in.npy"), str(tmp_path / "o.npy")],
+                         env=env, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.startswith("compiling LBP kernels (first run only)")
+    found = re.search(r"LBP ([0-9.]+) s \(\+ ([0-9.]+) s compiling kernels, first run only\)", run.stdout)
+    assert found, run.stdout
+    lbp, compiling = float(found[1]), float(found[2])
+    assert lbp < 1.0 < compiling  # 720 cells: milliseconds of LBP, seconds of compiling
