@@ -50,6 +50,15 @@ def test_a_bad_map_is_logged_once_and_never_published():
     assert "2 on /map (data length)" in node.summary()
 
 
+def test_an_empty_map_is_logged_as_empty_not_as_a_length_fault():
+    node, lines, sent = _refine_node(period=0.0)
+    node.on_grid(_native(1, width=0, data=()))
+    node.step(1.0)
+    assert lines == ["skipping a /map message: the map is empty (0 x 1 cells, no data): nothing to refine "
+                     "[empty map; further ones are counted, not logged]"]
+    assert sent == [] and "1 on /map (empty map)" in node.summary()
+
+
 def test_refine_grid_is_crfmap_infer_default(tmp_path):
     from crfmap.cli import main
     from crfmap.grid import OccupancyGrid
