@@ -31,7 +31,6 @@ import time
 from collections import deque
 from dataclasses import dataclass
 
-
 from crfmap.errors import InputError
 from crfmap.ros import qos
 from crfmap.ros.messages import (BadMessage, check_scan, grid_message, grid_out, occupancy_grid, same_geometry,
@@ -45,6 +44,7 @@ IDLE_SECONDS = 0.1  # longest wait for messages between two looks at the stop fl
 def refine_grid(grid):
     """The default preset's refinement of ``grid``: what ``crfmap infer IN OUT`` computes with its defaults.
 
+    >>> import numpy as np
     >>> from crfmap.grid import OccupancyGrid
     >>> g = OccupancyGrid(np.array([[0.5, 1.0, 0.0, 0.5]]))
     >>> refine_grid(g).shape
