@@ -241,6 +241,28 @@ def _scoring():
     score(split, {"raw": split.raw_probability()}, n_boot=2, block=1)
 
 
+def _peers():
+    """The published peers ``crfmap evaluate`` scores: OctoMap's clamped update and Bayesian Hilbert maps.
+
+    Without this task the first ``crfmap evaluate`` after ``make venv`` compiled six kernels
+    (``octomap._octomap_update``, ``_ray_cells``; ``hilbert._features``, ``_fit_batch``, ``_lam``,
+    ``_predict``) that no other task reaches.
+    """
+    import numpy as np
+
+    from crfmap.assess.peers import PEERS, peer_rows
+    from crfmap.assess.scansplit import scan_split
+    from crfmap.recording import ScanSet
+
+    rng = np.random.default_rng(0)
+    n, beams = 6, 90
+    ranges = rng.uniform(0.5, 3.0, (n, beams)).astype(np.float32)
+    ranges[:, ::17] = np.inf  # no returns
+    poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
+    scans = ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+    peer_rows(scan_split(scans, 0.1), list(PEERS))  # the halves are strided views, as on a real log
+
+
 def _gibbs():
     """The background chapter's Gibbs sampler (notebook 01): chains and lattices share one kernel."""
     from crfstudy.experiments.background import gibbs_ising
@@ -269,6 +291,7 @@ def all_tasks() -> dict:
         "simulator": (_simulator, 9.5),
         "bandwidth": (_bandwidth, 0.5),
         "scoring": (_scoring, 1.5),
+        "peers": (_peers, 2.0),
         "gibbs": (_gibbs, 0.5),
     }
     for name in SETTINGS:
