@@ -109,3 +109,17 @@ def test_a_recording_tf_cannot_hold_is_refused_naming_its_source_without_numpy_r
         write_bag(Recording(scans), tmp_path / "odd.bag", fmt="ros1")
     assert str(refused.value).startswith("odd.log: 1 scans share a stamp") and "scans 0 and 1, 7 s" in str(refused.value)
     assert "np." not in str(refused.value)
+
+
+def test_write_bag_shows_its_progress_when_asked(tmp_path, capsys):
+    from crfmap.io.bag_reader import read_bag
+    from crfmap.io.bag_writer import write_bag
+    from crfmap.recording import Recording, ScanSet
+
+    scans = ScanSet(np.ones((3, 4), np.float32), -0.5, 0.3, 0.1, 5.0, np.array([[0.0, 0, 0], [0.1, 0, 0], [0.2, 0, 0]]),
+                    np.array([1.0, 2.0, 3.0]))
+    write_bag(Recording(scans), tmp_path / "quiet.bag", fmt="ros1")
+    assert capsys.readouterr().err == ""
+    write_bag(Recording(scans), tmp_path / "shown.bag", fmt="ros1", progress=True)
+    assert "writing bag" in capsys.readouterr().err
+    np.testing.assert_array_equal(read_bag(tmp_path / "shown.bag").scans.ranges, read_bag(tmp_path / "quiet.bag").scans.ranges)

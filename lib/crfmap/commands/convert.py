@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import warnings
 from dataclasses import replace
@@ -116,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
                          laser_mount=args.laser_mount, max_range=args.max_range, uses_odometry=True)
     rec = shift_zero_start(stamps_from_order(rec, args.input), args.input)
-    write_bag(rec, out, fmt=fmt, **ros2_bag_kwargs(args, fmt))
+    write_bag(rec, out, fmt=fmt, progress=sys.stderr.isatty(), **ros2_bag_kwargs(args, fmt))
     n_odom = len(rec.odometry) if rec.odometry is not None else 0
     print(f"{args.input}: {len(rec.scans)} scans, {n_odom} odometry poses -> {fmt} bag {out} "
           f"({time.perf_counter() - start:.2f} s)")

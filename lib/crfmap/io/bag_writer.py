@@ -78,7 +78,7 @@ def offered_qos(topic):
                QosTime(0, 0), QosLiveliness.AUTOMATIC, QosTime(0, 0), False)
 
 
-def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
+def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble", progress=False):
     """Write a :class:`~crfmap.recording.Recording` as a ROS2 bag folder or a ROS1 ``.bag`` file.
 
     Parameters
@@ -92,6 +92,8 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
     distro : {'humble', 'jazzy'}
         The rosbag2 whose files to write: Humble's (default; metadata version 5, sqlite3 schema 3;
         every later rosbag2 reads them) or Jazzy's (version 9, schema 4; Humble cannot read them).
+    progress : bool
+        Show a tqdm bar of the messages written (seconds for a log of a few thousand scans).
 
     Notes
     -----
@@ -133,7 +135,8 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
         topics = {}
         for _, topic, msgtype, _ in messages:
             topics.setdefault(topic, Topic(topic, msgtype, store, [offered_qos(topic)]))
-        serialized = [(ns, topic, store.serialize_cdr(msg, msgtype)) for ns, topic, msgtype, msg in messages]
+        serialized = [(ns, topic, store.serialize_cdr(msg, msgtype))
+                      for ns, topic, msgtype, msg in _bar(messages, progress)]
         with atomic_dir(path) as tmp:
             tmp.mkdir()
             write_rosbag2(tmp, path.name, serialized, topics, storage, distro)
@@ -143,8 +146,17 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
         with atomic_path(path) as tmp:
             tmp.unlink()  # rosbags' writer refuses an existing file
             with Rosbag1Writer(tmp) as writer:
-                _write_all(writer, messages, store, store.serialize_ros1)
+                _write_all(writer, _bar(messages, progress), store, store.serialize_ros1)
     return path
+
+
+def _bar(messages, progress):
+    """``messages``, through a tqdm bar when ``progress``."""
+    if not progress:
+        return messages
+    from tqdm.auto import tqdm
+
+    return tqdm(messages, desc="writing bag", unit="msg")
 
 
 def _header_ns(msg):
