@@ -385,38 +385,28 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
         raise InputError("methods", f"unknown row(s) {', '.join(unknown)}; known: "
                          f"{', '.join(list(BASELINES) + [preset] + list(PEERS))}")
     peer_names = [m for m in wanted if m in PEERS]
-    steps = ["baselines"] + [preset] * (preset in wanted) + peer_names + ["scores"] + ["nav2 reading"] * bool(nav)
-    bar = tqdm(total=len(steps), desc="evaluate", unit="step", disable=not progress)
-
-    def step(name):
-        bar.set_postfix_str(name, refresh=False)
-        bar.update(0)
-
-    step("baselines")
+    bar = tqdm(total=2 + (preset in wanted) + len(peer_names) + bool(nav), desc="evaluate", unit="step",
+               disable=not progress)
     predictions = all_baselines(split, names=[m for m in wanted if m in BASELINES])
     bar.update(1)
     out_lbp = None
     if preset in wanted:
-        step(preset)
         result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes)  # as users run it
         predictions[preset] = result.beliefs.probability
         out_lbp = {"converged": result.converged, "iterations": result.iterations, "last_change": result.last_change}
         bar.update(1)
     seconds = {}
-    for name in peer_names:
-        step(name)
+    for name in peer_names:  # one at a time, so that the bar moves
         peer, took = peer_rows(split, [name])
         predictions.update(peer)
         seconds.update(took)
         bar.update(1)
     predictions.update(extra or {})
-    step("scores")
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
     bar.update(1)
     if nav:
         from crfmap.assess.navigation import nav_scores  # navigation imports this module: here, not at the top
 
-        step("nav2 reading")
         out["_nav"] = nav_scores(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw",
                                  scores=out)
         bar.update(1)
