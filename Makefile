@@ -75,7 +75,7 @@ dry-run: $(STAMP)
 	$(BIN)/python -m crfstudy.repro.reproduce --dry-run
 
 lab: warm
-	$(BIN)/jupyter lab notebooks/
+	$(BIN)/jupyter lab notebooks/$(if $(filter 0,$(shell id -u)), --allow-root)
 
 bench: $(STAMP)
 	$(BIN)/crfmap bench

@@ -178,3 +178,73 @@ def test_choices_and_help_come_from_the_registries(capsys):
     evaluate = {a.dest: a for a in sub["evaluate"]._actions}
     assert list(evaluate["preset"].choices) == list(PRESETS)
     assert all(name in evaluate["methods"].help for name in list(BASELINES) + list(PEERS))
+
+
+def _humble_map(folder, free_thresh="0.25"):
+    """A trinary map as Humble's map_saver writes it: 254 free, 0 occupied, 205 unknown, free_thresh 0.25."""
+    from PIL import Image
+
+    grey = np.full((12, 16), 205, np.uint8)
+    grey[3:9, 3:13] = 254
+    grey[3, 3:13] = 0
+    Image.fromarray(grey).save(folder / "humble.pgm")
+    (folder / "humble.yaml").write_text("image: humble.pgm\nmode: trinary\nresolution: 0.05\norigin: [0, 0, 0]\n"
+                                        f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: {free_thresh}\n")
+    return folder / "humble.yaml", int((grey == 205).sum())
+
+
+def _unknown(path):
+    return int((load_grid(path).to_int8() == -1).sum())
+
+
+def test_infer_keeps_a_humble_maps_unknown_cells_unknown_and_says_so(tmp_path, capsys):
+    path, grey = _humble_map(tmp_path)
+    assert _unknown(path) == 0  # nav2's reading of the file: every unknown grey is free
+    assert main(["infer", str(path), str(tmp_path / "kept.yaml")]) == 0
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("compiling")]  # cold cache
+    assert len(err) == 1 and f"free_thresh 0.25 would read {grey} unknown cells as free" in err[0]
+    assert "--free-thresh 0.25 gives nav2's reading" in err[0] and "np." not in err[0]
+    assert _unknown(tmp_path / "kept.yaml") >= grey - 2 * 16 * 5  # the unexplored outside stays unknown
+    # the other reading, asked for: no unknown cell in, none out, no warning
+    assert main(["infer", str(path), str(tmp_path / "free.yaml"), "--free-thresh", "0.25"]) == 0
+    assert capsys.readouterr().err == "" and _unknown(tmp_path / "free.yaml") == 0
+    # a map whose thresholds already keep 205 unknown: no warning
+    path, _ = _humble_map(tmp_path, free_thresh="0.196")
+    assert main(["infer", str(path), str(tmp_path / "jazzy.yaml")]) == 0
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.skipif(not have_data(OLIN), reason="Olin map not in the data folder")
+def test_infer_keeps_the_olin_maps_unknown_space(tmp_path, capsys):
+    """The shipped Olin map (Humble map_saver, free_thresh 0.25): 0 unknown cells as nav2 reads it, 1,220,114 kept."""
+    assert _unknown(data_file(OLIN)) == 0
+    kept = load_grid(data_file(OLIN), free_thresh=0.196)
+    unknown_in = int((kept.to_int8() == -1).sum())
+    out = tmp_path / "refined.yaml"
+    assert main(["infer", str(data_file(OLIN)), str(out), "--max-iter", "30", "--float32"]) == 0
+    err = capsys.readouterr().err
+    assert f"free_thresh 0.25 would read {unknown_in} unknown cells as free" in err
+    unknown_out = _unknown(out)
+    # the certainty preset infers within 5 cells of an observation: the rest of the unknown space stays unknown
+    assert unknown_in > 1_000_000 and 0.9 * unknown_in < unknown_out <= unknown_in
+
+
+@pytest.mark.slow
+def test_first_infer_on_an_empty_cache_reports_the_compile_apart_from_lbp(tmp_path):
+    """With an empty numba cache the first `crfmap infer` compiles; its line gives the LBP time without it."""
+    import os
+    import re
+    import subprocess
+    import sys
+
+    grid, _ = noisy_grid()
+    save_grid(grid, tmp_path / "in.npy")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    run = subprocess.run([sys.executable, "-m", "crfmap", "infer", str(tmp_path / "in.npy"), str(tmp_path / "o.npy")],
+                         env=env, capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.startswith("compiling LBP kernels (first run only)")
+    found = re.search(r"LBP ([0-9.]+) s \(\+ ([0-9.]+) s compiling kernels, first run only\)", run.stdout)
+    assert found, run.stdout
+    lbp, compiling = float(found[1]), float(found[2])
+    assert lbp < 1.0 < compiling  # 720 cells: milliseconds of LBP, seconds of compiling

@@ -74,3 +74,52 @@ def test_convert_drops_zero_stamped_odometry_with_one_warning(tmp_path, capsys):
         "(corrupt odometry)"]
     odom = [t for topic, t in _log_times(tmp_path / "c.bag") if topic == "/odom"]
     assert odom == [100_000_000, 350_000_000]
+
+
+@pytest.mark.parametrize("stamps, said", [
+    ((0, 0, 0, 0), "every scan is stamped 0"),
+    ((5, 5, 6, 6), "2 of 4 scans repeat a stamp at another pose"),
+])
+def test_convert_stamps_scans_by_their_order_when_their_stamps_cannot_place_them(tmp_path, capsys, stamps, said):
+    """A log whose FLASER stamps are all 0 or repeat converts, stamped by scan order (one warning), poses kept."""
+    from crfmap.commands.convert import ORDER_PERIOD
+    from crfmap.io.bag_reader import read_bag
+    from crfmap.sim.simulator import START_TIME
+
+    log = tmp_path / "z.log"
+    log.write_text("".join(f"FLASER 3 1.0 2.0 3.0 {0.5 * i} 0 0 {0.5 * i} 0 0 {t} host {t}\n"
+                           for i, t in enumerate(stamps)))
+    assert main(["convert", str(log), str(tmp_path / "z.bag")]) == 0
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"crfmap convert: warning: {log}: {said}, so tf cannot place them; stamped by their "
+                                f"order instead, {START_TIME:.0f} s + {ORDER_PERIOD:g} s per scan"]
+    scans = read_bag(tmp_path / "z.bag").scans
+    np.testing.assert_allclose(scans.stamps - START_TIME, ORDER_PERIOD * np.arange(4), atol=1e-6)
+    np.testing.assert_allclose(scans.laser_poses[:, 0], [0.0, 0.5, 1.0, 1.5], atol=1e-9)
+
+
+def test_a_recording_tf_cannot_hold_is_refused_naming_its_source_without_numpy_reprs(tmp_path):
+    from crfmap.errors import InputError
+    from crfmap.io.bag_writer import write_bag
+    from crfmap.recording import Recording, ScanSet
+
+    scans = ScanSet(np.ones((2, 3), np.float32), -0.5, 0.5, 0.1, 5.0, np.array([[0.0, 0, 0], [1.0, 0, 0]]),
+                    np.array([7.0, 7.0]), source="odd.log")
+    with pytest.raises(InputError) as refused:
+        write_bag(Recording(scans), tmp_path / "odd.bag", fmt="ros1")
+    assert str(refused.value).startswith("odd.log: 1 scans share a stamp") and "scans 0 and 1, 7 s" in str(refused.value)
+    assert "np." not in str(refused.value)
+
+
+def test_write_bag_shows_its_progress_when_asked(tmp_path, capsys):
+    from crfmap.io.bag_reader import read_bag
+    from crfmap.io.bag_writer import write_bag
+    from crfmap.recording import Recording, ScanSet
+
+    scans = ScanSet(np.ones((3, 4), np.float32), -0.5, 0.3, 0.1, 5.0, np.array([[0.0, 0, 0], [0.1, 0, 0], [0.2, 0, 0]]),
+                    np.array([1.0, 2.0, 3.0]))
+    write_bag(Recording(scans), tmp_path / "quiet.bag", fmt="ros1")
+    assert capsys.readouterr().err == ""
+    write_bag(Recording(scans), tmp_path / "shown.bag", fmt="ros1", progress=True)
+    assert "writing bag" in capsys.readouterr().err
+    np.testing.assert_array_equal(read_bag(tmp_path / "shown.bag").scans.ranges, read_bag(tmp_path / "quiet.bag").scans.ranges)

@@ -26,3 +26,12 @@ def test_environment_yml_matches_pyproject():
             conda_names.add(_name(dep))
     conda_names -= {"python", "pip"}
     assert conda_names == pip_names, (sorted(conda_names - pip_names), sorted(pip_names - conda_names))
+
+
+def test_make_lab_allows_root_only_for_root():
+    """JupyterLab refuses to start as root without --allow-root (containers and CI images run as root)."""
+    import os
+    import subprocess
+
+    out = subprocess.run(["make", "-n", "-o", "warm", "lab"], capture_output=True, text=True, cwd=ROOT).stdout
+    assert "jupyter lab notebooks/" in out and ("--allow-root" in out) == (os.getuid() == 0)

@@ -103,6 +103,20 @@ def test_compare_keeps_the_grids_it_scored_only_when_asked():
     assert again == kept[D]["all"]["brier"]
 
 
+def test_compare_shows_its_steps_when_asked_and_scores_the_same(room, capsys):
+    from crfmap.assess.comparison import compare
+
+    sp = scan_split(room, 0.1, bounds=(0, 0, 2, 2))
+    quiet = compare(sp, n_boot=0, methods=["raw", "mean3x3", D, "octomap"])
+    assert capsys.readouterr().err == ""
+    shown = compare(sp, n_boot=0, methods=["raw", "mean3x3", D, "octomap"], progress=True)
+    err = capsys.readouterr().err
+    assert "evaluate" in err and "5/5" in err  # baselines, the preset, one peer, the scores, the nav2 reading
+    shown.pop("_seconds")
+    quiet.pop("_seconds")
+    np.testing.assert_equal(shown, quiet)  # (NaN where a group has no cell, equal to NaN here)
+
+
 def test_bad_input_is_named():
     sp = ScanSplit(*(np.zeros((2, 2), int) for _ in range(4)))
     with pytest.raises(InputError, match="shape"):

@@ -28,3 +28,41 @@ def test_no_note_once_infer_has_run(capsys):
     assert not needs_compiling(K._send_rows) and not needs_compiling(M._beliefs)
     infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     assert capsys.readouterr().err == ""
+
+
+def test_compile_timer_counts_a_compile_and_not_the_work():
+    import time
+
+    from crfmap.crf.inference.compiling import compile_timer
+
+    @njit
+    def total(x):  # no disk cache: its first call compiles
+        s = 0.0
+        for v in x:
+            s += v
+        return s
+
+    t0 = time.perf_counter()
+    with compile_timer() as kernels, compile_timer(loading=False) as compiling:
+        total(np.ones(3))
+    wall = time.perf_counter() - t0
+    assert 0 < compiling.seconds <= kernels.seconds <= wall
+    with compile_timer() as again:
+        total(np.ones(10**6))  # compiled: only work
+    assert again.seconds == 0.0
+
+
+def test_infer_reports_lbp_time_without_the_compile():
+    """A kernel infer has never called in this process compiles (or loads) inside the call: timings["compile"],
+    kept out of seconds; a second call has nothing to compile."""
+    import time
+
+    grid = np.random.default_rng(1).uniform(0.0, 1.0, (9, 7))
+    t0 = time.perf_counter()
+    first = infer(grid, max_iter=3, schedule="sweep", dtype=np.float32)
+    wall = time.perf_counter() - t0
+    second = infer(grid, max_iter=3, schedule="sweep", dtype=np.float32)
+    assert "compile" not in second.timings
+    if "compile" in first.timings:  # (absent when an earlier test of this process already ran the sweep kernels)
+        assert first.seconds + first.timings["compile"] <= wall
+        assert first.seconds < first.timings["compile"]  # 63 cells: the kernels cost more than the LBP

@@ -6,6 +6,7 @@ from crfmap.data import data_file, have_data
 from crfmap.mapping import builder
 from crfmap.errors import InputError
 from crfmap.crf.inference.lbp import infer
+from crfmap.crf.presets import CRITICAL_COUPLING, DEFAULT_PRESET, PRESETS, custom_preset, get_preset
 from crfmap.mapping.online import OnlineMapper
 from crfmap.recording import ScanSet
 
@@ -151,7 +152,7 @@ def test_margin_keeps_messages_from_unobserved_cells_still():
 
 
 def test_margin_final_map_equals_offline_bounded_lbp():
-    """With a margin, finish() reaches infer(region=the same near-observed cells): tolerance 1e-6."""
+    """With a margin, finish() reaches the preset's refinement (LBP near observations, 0.5 beyond): tolerance 1e-6."""
     scans = room_scans(n=4)
     mapper = OnlineMapper.for_scans(scans, 0.1, hidden=WEAK, dtype=np.float64, radius=1.0, max_iter=4, margin=1)
     mapper.run(scans)
@@ -160,7 +161,50 @@ def test_margin_final_map_equals_offline_bounded_lbp():
     offline = infer(builder.build_grid(scans, 0.1), WEAK, tol=1e-10, max_iter=5000, dtype=np.float64,
                     region=mapper.region())
     assert final.converged and offline.converged
+    inside = mapper.region()
+    np.testing.assert_allclose(final.beliefs.probability[inside], offline.beliefs.probability[inside], atol=1e-6)
+    # outside the region nothing was inferred: unknown, as Preset.refine leaves it (infer reports received messages)
+    assert np.all(final.beliefs.probability[~inside] == 0.5)
+    occupied, empty = builder.count_hits(scans, 0.1)
+    refined = custom_preset(WEAK, margin=1).refine(hits=occupied, passes=empty, tol=1e-10, max_iter=5000,
+                                                   dtype=np.float64)
+    np.testing.assert_allclose(final.beliefs.probability, refined.beliefs.probability, atol=1e-6)
+
+
+# Presets whose coupling is below the lattice's critical one: LBP has one fixed point, which online and offline
+# runs share. The thesis preset is in its ordered phase: on this room the online run ends all-empty and the
+# offline one all-occupied (two fixed points), so no equality can hold for it.
+SINGLE_FIXED_POINT = sorted(name for name, p in PRESETS.items() if p.coupling < CRITICAL_COUPLING)
+
+
+def test_the_default_preset_has_one_fixed_point():
+    assert DEFAULT_PRESET in SINGLE_FIXED_POINT and "thesis" not in SINGLE_FIXED_POINT
+
+
+@pytest.mark.parametrize("name", SINGLE_FIXED_POINT)
+def test_finish_equals_the_presets_offline_refinement(name):
+    """finish() after per-scan bounded LBP is the preset's refinement of the same counts: tolerance 1e-6 in P
+    (both float64, tol 1e-10)."""
+    scans = room_scans()
+    mapper = OnlineMapper.for_scans(scans, 0.1, preset=name, dtype=np.float64, radius=1.0, max_iter=4)
+    mapper.run(scans)
+    assert mapper.preset is get_preset(name) and mapper.margin == get_preset(name).margin
+    final = mapper.finish(tol=1e-10, max_iter=5000)
+    occupied, empty = builder.count_hits(scans, 0.1)
+    offline = get_preset(name).refine(hits=occupied, passes=empty, tol=1e-10, max_iter=5000, dtype=np.float64)
+    assert final.converged and offline.converged
     np.testing.assert_allclose(final.beliefs.probability, offline.beliefs.probability, atol=1e-6)
+
+
+def test_the_default_is_the_default_preset_and_tables_make_a_custom_one():
+    scans = room_scans(n=2)
+    assert OnlineMapper.for_scans(scans, 0.1).preset is get_preset(DEFAULT_PRESET)
+    custom = OnlineMapper.for_scans(scans, 0.1, hidden=WEAK, margin=2).preset
+    assert custom.name == "custom" and custom.margin == 2 and not custom.scaled
+    with pytest.raises(InputError, match="preset"):
+        OnlineMapper.for_scans(scans, 0.1, preset="thesis", hidden=WEAK)
+    with pytest.raises(InputError, match="preset"):
+        OnlineMapper.for_scans(scans, 0.1, preset="no-such-preset")
 
 
 @pytest.mark.skipif(not have_data("carmen/intel-corrected.log.gz"), reason="Intel lab log not present")

@@ -28,13 +28,13 @@ def _intel_grid():
     return build_grid(read_carmen(data_file(INTEL)).scans, 0.1)
 
 
-def _expected(source, tmp_path, name):
+def _expected(source, tmp_path, name, *options):
     """`crfmap infer` of a grid (an OccupancyGrid, or a map file), as 0..100 / -1 values."""
     out = tmp_path / f"{name}_out.npy"
     if not isinstance(source, str):
         save_npy(source, tmp_path / f"{name}_in.npy")
         source = tmp_path / f"{name}_in.npy"
-    assert crfmap_main(["infer", str(source), str(out)]) == 0
+    assert crfmap_main(["infer", str(source), str(out), *options]) == 0
     return load_grid(out).to_int8().reshape(-1)
 
 
@@ -73,7 +73,9 @@ def test_refine_node_over_dds(tmp_path, monkeypatch):
     # the map the node receives is the file's grid itself (trinary: 0, 100, -1 carry P exactly)
     assert np.array_equal(occupancy_grid(olin).probability, olin_file.probability)
     intel = grid_out(_intel_grid(), 1_700_000_100_000_000_001, "map")
-    expected = {"olin": _expected(str(data_file(OLIN)), tmp_path, "olin"),
+    # the node gets the map as map_server publishes the file, its free_thresh 0.25 reading unknown grey as free;
+    # crfmap infer keeps those cells unknown unless given the file's own threshold
+    expected = {"olin": _expected(str(data_file(OLIN)), tmp_path, "olin", "--free-thresh", "0.25"),
                 "intel": _expected(occupancy_grid(intel), tmp_path, "intel")}
 
     node = NodeProcess(["refine", "--period", "0"], env)

@@ -25,7 +25,9 @@ def test_grid_values_become_probabilities_and_back():
 
 @pytest.mark.parametrize("change, kind", [
     ({"width": 4}, "data length"),
-    ({"data": np.zeros(0, np.int8), "width": 0, "height": 0}, "data length"),
+    ({"data": np.zeros(0, np.int8), "width": 0, "height": 0}, "empty map"),
+    ({"data": np.zeros(0, np.int8), "width": 5, "height": 0}, "empty map"),
+    ({"data": np.zeros(0, np.int8)}, "data length"),  # 0 cells for a 3 x 2 grid
     ({"resolution": float("nan")}, "resolution"),
     ({"resolution": -0.05}, "resolution"),
     ({"resolution": 0.0}, "resolution"),

@@ -1,5 +1,6 @@
 """The node's core without middleware: newest map only, at most once per period, bad messages logged once."""
 import numpy as np
+import pytest
 
 from crfmap.ros.node import MapNode, RefineNode, refine_grid
 from crfmap.ros.messages import GridMessage
@@ -47,6 +48,15 @@ def test_a_bad_map_is_logged_once_and_never_published():
     assert len(skipped) == 1 and "2 cells for a 3 x 1 grid" in skipped[0]
     assert [m.stamp_ns // 10**9 for m in sent] == [3]
     assert "2 on /map (data length)" in node.summary()
+
+
+def test_an_empty_map_is_logged_as_empty_not_as_a_length_fault():
+    node, lines, sent = _refine_node(period=0.0)
+    node.on_grid(_native(1, width=0, data=()))
+    node.step(1.0)
+    assert lines == ["skipping a /map message: the map is empty (0 x 1 cells, no data): nothing to refine "
+                     "[empty map; further ones are counted, not logged]"]
+    assert sent == [] and "1 on /map (empty map)" in node.summary()
 
 
 def test_refine_grid_is_crfmap_infer_default(tmp_path):
@@ -117,3 +127,95 @@ def test_map_node_accounts_for_every_scan_and_logs_the_integrated_ones(tmp_path)
     for pose in poses:
         mapper.integrate(np.array([1.0, 2.0, 1.0], np.float32), pose)
     assert np.array_equal(sent[-1].data, mapper.beliefs().to_int8().reshape(-1))
+
+
+def _room_recording(n=10, beams=91, seed=3):
+    """Scans in a 4 m x 3 m box room (analytic ranges), with their laser poses."""
+    rng = np.random.default_rng(seed)
+    angles = np.linspace(-2.0, 2.0, beams)
+    poses = np.column_stack([rng.uniform(0.8, 3.2, n), rng.uniform(0.8, 2.2, n), rng.uniform(-np.pi, np.pi, n)])
+    a = poses[:, 2:3] + angles
+    c, s = np.cos(a), np.sin(a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tx = np.where(c > 0, (4.0 - poses[:, :1]) / c, np.where(c < 0, -poses[:, :1] / c, np.inf))
+        ty = np.where(s > 0, (3.0 - poses[:, 1:2]) / s, np.where(s < 0, -poses[:, 1:2] / s, np.inf))
+    return np.minimum(tx, ty).astype(np.float32), angles, poses
+
+
+class _LoopBackend:
+    """A backend without middleware: delivers the given messages in order through spin_once, then stops the node."""
+
+    def __init__(self, messages, stop):
+        self.messages, self.stop, self.callbacks, self.sent = list(messages), stop, {}, {}
+
+    def subscribe(self, topic, kind, profile, callback):
+        self.callbacks[topic] = callback
+
+    def publisher(self, topic, kind, profile):
+        return self.sent.setdefault(topic, []).append
+
+    def spin_once(self, timeout):
+        if self.messages:
+            topic, msg = self.messages.pop(0)
+            self.callbacks[topic](msg)
+        elif timeout > 0:  # nothing left and the node waits for nothing: the run is over
+            self.stop.set()
+
+
+@pytest.mark.parametrize("preset", [None, "certainty"])
+def test_map_node_final_map_is_the_presets_offline_refinement(tmp_path, preset):
+    """The node (default preset, or named) publishes on stop the map the same preset's offline refinement makes of
+    the scans it integrated (count_hits at the logged laser poses, then Preset.refine). Tolerance: 2e-3 in P (the
+    node's float32 messages and both runs' tol 1e-5), and the published 0..100 values within 1."""
+    import threading
+    from types import SimpleNamespace as NS
+
+    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+    from crfmap.mapping.builder import count_hits
+    from crfmap.recording import ScanSet
+    from crfmap.ros.node import spin
+
+    ranges, angles, poses = _room_recording()
+    bounds = (-1.0, -1.0, 5.0, 4.0)  # [m] a metre round the room: cells beyond the margin stay unknown
+
+    def tf(sec, pose):
+        return NS(transforms=[NS(header=NS(stamp=NS(sec=sec, nanosec=0), frame_id="odom"), child_frame_id="laser",
+                                 transform=NS(translation=NS(x=pose[0], y=pose[1], z=0.0),
+                                              rotation=NS(x=0.0, y=0.0, z=np.sin(pose[2] / 2), w=np.cos(pose[2] / 2))))])
+
+    def scan(sec, r):
+        return NS(header=NS(stamp=NS(sec=sec, nanosec=0), frame_id="laser"), angle_min=float(angles[0]),
+                  angle_max=float(angles[-1]), angle_increment=float(angles[1] - angles[0]), range_min=0.05,
+                  range_max=8.0, ranges=r.tolist())
+
+    messages = []
+    for i, (r, pose) in enumerate(zip(ranges, poses)):  # a still robot per scan: tf just before and at the stamp
+        messages += [("/tf", tf(10 * i + 9, pose)), ("/tf", tf(10 * i + 10, pose)), ("/scan", scan(10 * i + 10, r))]
+    messages.append(("/tf", tf(10 * len(poses) + 10, poses[-1])))
+    options = {"radius": 1.0} if preset is None else {"radius": 1.0, "preset": preset}
+    log = tmp_path / "scans.txt"
+    lines = []
+    node = MapNode(bounds, 0.1, period=0.0, mapper_options=options, log=lines.append, scan_log=log)
+    stop = threading.Event()
+    backend = _LoopBackend(messages, stop)
+    summary = spin(node, backend, stop, log=lambda line: None)
+    node.close()
+    assert summary.startswith(f"{len(poses)} scans integrated of {len(poses)} received")
+    final = backend.sent["/map"][-1]  # a GridMessage, as the node hands it to a backend
+    assert final.stamp_ns == node.last_stamp_ns and len(backend.sent["/map"]) >= 2  # per-scan maps, then the final
+    assert any(line.startswith(f"final map ({DEFAULT_PRESET if preset is None else preset} preset") for line in lines)
+
+    logged = np.array([[float(v) for v in line.split()[1:]] for line in log.read_text().splitlines()])
+    np.testing.assert_allclose(logged, poses, atol=1e-9)  # tf placed each scan where it was taken
+    scans = ScanSet(ranges, float(angles[0]), float(angles[1] - angles[0]), 0.05, 8.0, logged,
+                    np.arange(len(poses), dtype=float))
+    occupied, empty = count_hits(scans, 0.1, bounds=bounds)
+    assert occupied.shape == (final.height, final.width)
+    offline = get_preset(preset or DEFAULT_PRESET).refine(hits=occupied, passes=empty, dtype=np.float64)
+    assert offline.converged
+    np.testing.assert_allclose(node.mapper.beliefs().probability, offline.beliefs.probability, atol=2e-3)
+    published = final.data.reshape(final.height, final.width).astype(int)
+    assert np.abs(published - offline.beliefs.to_int8().astype(int)).max() <= 1
+    # the unexplored outside stays unknown, walls stay walls
+    assert np.array_equal(published == -1, offline.beliefs.to_int8() == -1) and (published == -1).any()
+    assert (published >= 65).sum() >= 0.9 * (offline.beliefs.probability >= 0.65).sum() > 0

@@ -25,3 +25,31 @@ def test_a_missing_backend_is_a_one_line_error(capsys):
     assert main(["node", "refine", "--backend", "rclpy"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("crfmap node: error: --backend rclpy: rclpy is not importable") and "\n" not in err
+
+
+@pytest.mark.parametrize("argv, preset, margin", [
+    ([], "default", "own"),  # the default preset, its own margin
+    (["--preset", "thesis"], "thesis", None),
+    (["--preset", "thesis", "--margin", "3"], "thesis", 3),
+    (["--preset", "certainty"], "certainty", 5),
+    (["--margin", "-1"], "default", None),
+])
+def test_map_mode_runs_the_preset_asked_for(argv, preset, margin):
+    from crfmap.cli import build_parser
+    from crfmap.commands.node import make_node
+    from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
+    from crfmap.mapping.online import OnlineMapper
+
+    assert {"certainty", "thesis", DEFAULT_PRESET} <= set(PRESETS)  # the cases above
+    preset = DEFAULT_PRESET if preset == "default" else preset
+    margin = PRESETS[preset].margin if margin == "own" else margin
+    node = make_node(build_parser().parse_args(["node", "map", *argv]))
+    mapper = OnlineMapper.for_sensor((0, 0, 1, 1), 0.1, -1.0, 0.1, 21, 0.05, 5.0, **node.mapper_options)
+    assert mapper.preset.name == preset and mapper.margin == margin
+
+
+def test_an_unknown_preset_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["node", "map", "--preset", "nonesuch"])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and "invalid choice: 'nonesuch'" in err and "certainty" in err and "\n" not in err

@@ -119,3 +119,62 @@ def test_map_node_through_roscore(tmp_path):
             os.killpg(core.pid, signal.SIGKILL)
     assert status == 0, node.log()
     assert f"stopped: {len(scans)} scans integrated" in node.log(), node.log()
+
+
+MAP_TALKER = textwrap.dedent("""
+    import sys
+    from crfmap.ros.rospy_backend import _types, import_rospy
+    rospy = import_rospy()
+    OccupancyGrid = _types()["grid"]
+    rospy.init_node("crfmap_test_talker", disable_signals=True)
+    pub = rospy.Publisher("/map", OccupancyGrid, queue_size=1, latch=True)
+    m = OccupancyGrid()
+    m.header.stamp, m.header.frame_id = rospy.Time(5, 0), "map"
+    m.info.resolution, m.info.width, m.info.height = 0.05, 20, 10
+    m.info.origin.orientation.w = 1.0
+    m.data = [-1] * 100 + [100] * 20 + [0] * 80
+    pub.publish(m)
+    got = rospy.wait_for_message("/map_refined", OccupancyGrid, timeout=float(sys.argv[1]))
+    print(len(got.data))
+""")
+
+
+@pytest.mark.skipif(_ros1_missing() is not None, reason=str(_ros1_missing()))
+def test_refine_node_through_roscore_stops_without_ros_warnings(tmp_path):
+    """Refine one map over rospy, then SIGINT: exit 0, and no warning line about rospy's own code (Debian's rospy
+    calls Condition.notifyAll and leaves XML-RPC sockets to the garbage collector)."""
+    port = _free_port()
+    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_IP="127.0.0.1",
+               ROS_HOME=str(tmp_path / "ros_home"), ROS_LOG_DIR=str(tmp_path / "ros_log"))
+    env.pop("ROS_HOSTNAME", None)
+    core = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    node = None
+    try:
+        master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
+        deadline = time.monotonic() + TIMEOUT
+        while True:
+            try:
+                master.getSystemState("/crfmap_test")
+                break
+            except OSError:
+                assert time.monotonic() < deadline, "roscore did not start"
+                time.sleep(0.2)
+        node = NodeProcess(["refine", "--backend", "rospy", "--period", "0"], env)
+        node.wait_for("publishing /map_refined")
+        talker = subprocess.run([sys.executable, "-c", MAP_TALKER, str(TIMEOUT)], env=env, capture_output=True,
+                                text=True, timeout=TIMEOUT + 30)
+        assert talker.returncode == 0 and talker.stdout.split() == ["200"], talker.stderr
+        node.wait_for(r"refined /map \(20 x 10 cells")
+        status = node.stop(signal.SIGINT)
+        node.wait_for("stopped: 1 maps received, 1 refined and published")
+    finally:
+        if node is not None and node.proc.poll() is None:
+            node.stop(signal.SIGKILL)
+        os.killpg(core.pid, signal.SIGINT)
+        try:
+            core.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            os.killpg(core.pid, signal.SIGKILL)
+    assert status == 0, node.log()
+    assert not [line for line in node.lines if "warning" in line.lower()], node.log()

@@ -7,6 +7,8 @@ The rows are read from the registries of the methods, never typed again: the bas
 """
 from __future__ import annotations
 
+from tqdm.auto import tqdm
+
 from crfmap.assess.baselines import BASELINES, all_baselines
 from crfmap.assess.navigation import nav_scores
 from crfmap.assess.peers import PEERS, peer_rows
@@ -43,7 +45,8 @@ def parse_methods(text: str, preset: str = DEFAULT_PRESET) -> list:
 
 
 def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, block: int = DEFAULT_BLOCK,
-            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None, nav: bool = True) -> dict:
+            seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None, nav: bool = True,
+            progress: bool = False) -> dict:
     """Score the baselines (:func:`crfmap.assess.baselines.all_baselines`), ``preset`` and peers on a split.
 
     ``methods``: the rows to score, by name (baselines, ``preset``, the published peers of
@@ -55,25 +58,37 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     scored ``{name: P}`` under ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more
     ``{name: P}`` rows. ``nav`` (default): every row read the way nav2 reads the written trinary map, scored with
     :func:`crfmap.assess.navigation.nav_scores` against the raw grid on the same resamples, under ``"_nav"``
-    (``{name: {group: {metric, metric_ci, metric_diff, metric_diff_ci}, "map": {...}}}``).
+    (``{name: {group: {metric, metric_ci, metric_diff, metric_diff_ci}, "map": {...}}}``). ``progress``: a tqdm
+    bar of the steps (baselines, the preset, each peer, the scores, the nav2 reading).
     """
     wanted = list(BASELINES) + [preset] if methods is None else list(methods)
     unknown = [m for m in wanted if m not in method_names(preset)]
     if unknown:
         raise InputError("methods", f"unknown row(s) {', '.join(unknown)}; known: {', '.join(method_names(preset))}")
+    peer_names = [m for m in wanted if m in PEERS]
+    bar = tqdm(total=2 + (preset in wanted) + len(peer_names) + bool(nav), desc="evaluate", unit="step",
+               disable=not progress)
     predictions = all_baselines(split, names=[m for m in wanted if m in BASELINES])
+    bar.update(1)
     out_lbp = None
     if preset in wanted:
         result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes)  # as users run it
         predictions[preset] = result.beliefs.probability
         out_lbp = {"converged": result.converged, "iterations": result.iterations, "last_change": result.last_change}
-    peers, seconds = peer_rows(split, [m for m in wanted if m in PEERS])
-    predictions.update(peers)
+        bar.update(1)
+    seconds = {}
+    for name in peer_names:  # one at a time, so that the bar moves
+        peer, took = peer_rows(split, [name])
+        predictions.update(peer)
+        seconds.update(took)
+        bar.update(1)
     predictions.update(extra or {})
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
+    bar.update(1)
     if nav:
         out["_nav"] = nav_scores(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw",
                                  scores=out)
+        bar.update(1)
     if out_lbp is not None:
         out["_lbp"] = out_lbp
     if seconds:
@@ -83,6 +98,7 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
                        metrics=("brier", "logloss"))
         out["_vs_preset"] = {name: {g: {k: v for k, v in entry.items() if "_diff" in k} for g, entry in groups.items()}
                              for name, groups in versus.items() if name != preset}
+    bar.close()
     if keep_beliefs:
         out["_beliefs"] = predictions
     return out

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -164,7 +165,8 @@ def add_parser(sub):
     add_bag_options(p)
     p.add_argument("--bounds", type=float, nargs=4, default=None, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
                    help="area to map in metres (default: the data's bounding box)")
-    p.add_argument("--progress", action="store_true", help="show a progress bar")
+    p.add_argument("--progress", action="store_true", default=None,
+                   help="show a progress bar (default: when stderr is a terminal)")
     add_map_output_options(p)
     p.add_argument("--force", action="store_true", help="allow OUT_MAP to replace INPUT")
     return p
@@ -183,7 +185,8 @@ def run(args: argparse.Namespace) -> int:
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
                          laser_mount=args.laser_mount, max_range=args.max_range)
     grid = build_grid(rec.scans, args.resolution, model=args.model, bounds=args.bounds,
-                      free_on_no_return=args.free_on_no_return or False, progress=args.progress)
+                      free_on_no_return=args.free_on_no_return or False,
+                      progress=args.progress or sys.stderr.isatty())
     nav2_view = save_map_output(grid, out, args)
     seconds = time.perf_counter() - start
     dropped = rec.meta.get("scans_dropped", 0)

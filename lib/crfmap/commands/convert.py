@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import warnings
 from dataclasses import replace
@@ -21,7 +22,9 @@ def add_parser(sub):
         "of a CARMEN log as a ROS bag. A bag as input is re-written in the other format. No message gets "
         "time 0 (ROS reads it as 'no time'): a CARMEN log's ODOM records stamped 0 or out of time order "
         "are dropped (with a warning saying how many); a bag whose stamps start at 0 (an older crfmap "
-        "simulation) has every stamp shifted by 1700000000 s, the simulator's start time.",
+        "simulation) has every stamp shifted by 1700000000 s, the simulator's start time. Scans whose stamps "
+        "cannot place them (all 0, or repeated at different poses) are stamped by their order, 0.1 s apart "
+        "(odometry then dropped), with a warning.",
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("output", help="ROS2 bag folder, or ROS1 file ending in .bag")
@@ -36,6 +39,40 @@ def recording_stamps(rec):
     """Every stamp [s] of a recording: scans, odometry, true poses, cmd_vel."""
     tracks = [rec.scans] + [t for t in (rec.odometry, rec.true_poses, rec.cmd_vel) if t is not None]
     return np.concatenate([np.asarray(t.stamps, np.float64) for t in tracks])
+
+
+ORDER_PERIOD = 0.1  # [s] between scans stamped by their order (10 Hz, a common laser rate in CARMEN logs)
+
+
+def stamps_from_order(rec, source):
+    """``rec`` with its scans stamped by their order if their stamps cannot place them (one warning), else ``rec``.
+
+    A log whose FLASER stamps are all 0, or repeat at different poses, cannot be a bag: tf holds
+    one pose per time (:func:`crfmap.io.bag_writer.clashing_scans`). Scan i is then stamped
+    ``START_TIME + i * ORDER_PERIOD``, the true poses with it; odometry and cmd_vel, whose own
+    stamps cannot be related to those, are dropped.
+    """
+    from crfmap.io.bag_writer import clashing_scans
+    from crfmap.sim.simulator import START_TIME
+
+    clashes = clashing_scans(rec.scans, rec.laser_mount)
+    if not clashes:
+        return rec
+    scan_stamps = np.asarray(rec.scans.stamps, np.float64)
+    stamps = START_TIME + ORDER_PERIOD * np.arange(len(scan_stamps))
+    dropped = [name for name in ("odometry", "cmd_vel") if getattr(rec, name) is not None and len(getattr(rec, name))]
+    truth = rec.true_poses
+    if truth is not None and np.array_equal(np.asarray(truth.stamps, np.float64), scan_stamps):
+        truth = replace(truth, stamps=stamps.copy())  # the poses the scans were taken at
+    elif truth is not None:
+        truth, dropped = None, dropped + ["true poses"]
+    said = ("every scan is stamped 0" if not np.any(scan_stamps) else
+            f"{len(clashes)} of {len(scan_stamps)} scans repeat a stamp at another pose")
+    warnings.warn(f"{source}: {said}, so tf cannot place them; stamped by their order instead, "
+                  f"{START_TIME:.0f} s + {ORDER_PERIOD:g} s per scan"
+                  + (f"; {' and '.join(dropped)} dropped (their stamps do not fit those)" if dropped else ""),
+                  stacklevel=2)
+    return replace(rec, scans=replace(rec.scans, stamps=stamps), true_poses=truth, odometry=None, cmd_vel=None)
 
 
 def shift_zero_start(rec, source):
@@ -79,8 +116,8 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     rec = load_recording(args.input, scan_topic=args.scan_topic, pose_source=args.pose_source,
                          laser_mount=args.laser_mount, max_range=args.max_range, uses_odometry=True)
-    rec = shift_zero_start(rec, args.input)
-    write_bag(rec, out, fmt=fmt, **ros2_bag_kwargs(args, fmt))
+    rec = shift_zero_start(stamps_from_order(rec, args.input), args.input)
+    write_bag(rec, out, fmt=fmt, progress=sys.stderr.isatty(), **ros2_bag_kwargs(args, fmt))
     n_odom = len(rec.odometry) if rec.odometry is not None else 0
     print(f"{args.input}: {len(rec.scans)} scans, {n_odom} odometry poses -> {fmt} bag {out} "
           f"({time.perf_counter() - start:.2f} s)")

@@ -68,10 +68,13 @@ def run(args: argparse.Namespace) -> int:
     except InputError as e:
         raise InputError("--preset", e.problem) from None
     methods = parse_methods(args.methods, args.preset)
+    import sys
+
+    progress = sys.stderr.isatty()  # a minute or more on a real log: bars where someone watches
     rec = load_recording(args.input, max_range=args.max_range)
-    split = scan_split(rec.scans, args.resolution, parity=args.parity)
+    split = scan_split(rec.scans, args.resolution, parity=args.parity, progress=progress)
     scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed, methods=methods,
-                     keep_beliefs=True, nav=args.nav)
+                     keep_beliefs=True, nav=args.nav, progress=progress)
     beliefs = scores.pop("_beliefs")
     calibration = split_calibration(split, beliefs, group=args.group)
     scores["_ece"] = {name: c["ece"] for name, c in calibration.items()}

@@ -40,8 +40,10 @@ def add_parser(sub):
                    "preset's: " + ", ".join(f"{p.name} {'the whole grid' if p.margin is None else p.margin}"
                                             for p in PRESETS.values()) + "; custom tables the whole grid)")
     p.add_argument("--free-thresh", type=float, default=None,
-                   help="override a YAML input's free_thresh when loading (Humble's map_saver writes 0.25, "
-                   "which turns unknown grey 205 into free; 0.196 keeps it unknown)")
+                   help="override a YAML input's free_thresh when loading. Default: the file's, except where it "
+                   "would read unknown cells as free (Humble's map_saver writes 0.25, under which its unknown grey "
+                   "205 loads as free): then 0.196 keeps them unknown, said in one warning; give the file's value "
+                   "(e.g. --free-thresh 0.25) for nav2 Humble's reading")
     p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
     add_map_output_options(p)  # --mode, --save-occupied-thresh, --save-free-thresh, --loader
     p.add_argument("--force", action="store_true", help="allow OUT to replace IN (an in-place update)")
@@ -107,23 +109,66 @@ def _preset(args):
     return preset if args.margin is None else replace(preset, margin=args.margin)
 
 
+def load_input(args):
+    """The input grid; a map YAML whose free_thresh reads unknown cells as free keeps them unknown (one warning).
+
+    Humble's map_saver writes ``free_thresh: 0.25``, under which its own unknown grey (205, occ 0.196)
+    loads as free: refining and writing that map (for Jazzy's 0.196) would make every unexplored cell
+    free for good. Unless ``--free-thresh`` is given, such a map is read with map_saver's 0.196 instead.
+    """
+    import warnings
+
+    from crfmap.io.grid_files import load_grid
+    from crfmap.io.map_server import FREE_THRESH_DEFAULT
+
+    def load(free_thresh):
+        return load_grid(args.input, free_thresh=free_thresh, occupied_thresh=args.occupied_thresh,
+                         loader=args.loader)
+
+    grid = load(args.free_thresh)
+    file_free = grid.meta.get("free_thresh")
+    if args.free_thresh is not None or file_free is None or not file_free > FREE_THRESH_DEFAULT:
+        return grid
+    if args.occupied_thresh is not None and args.occupied_thresh <= FREE_THRESH_DEFAULT:
+        return grid  # the override cannot lie below 0.196: the file's reading it is
+    kept = load(FREE_THRESH_DEFAULT)
+    unknown_file, unknown_kept = int((grid.to_int8() == -1).sum()), int((kept.to_int8() == -1).sum())
+    if unknown_kept == unknown_file:
+        return grid  # no cell between the two thresholds: both readings agree
+    warnings.warn(f"{args.input}: free_thresh {file_free:g} would read {unknown_kept - unknown_file} unknown cells "
+                  f"as free (as nav2 loads this file); kept unknown (read with free_thresh {FREE_THRESH_DEFAULT:g}); "
+                  f"--free-thresh {file_free:g} gives nav2's reading", UserWarning, stacklevel=2)
+    return kept
+
+
+def kernel_time(kernels, compiling) -> str:
+    """What the numba kernels cost apart from the work: compiling (a first run) or loading them from the cache.
+
+    >>> kernel_time(33.1, 32.9), kernel_time(0.21, 0.0), kernel_time(0.001, 0.0)
+    (' (+ 33.1 s compiling kernels, first run only)', ' (+ 0.21 s loading compiled kernels)', '')
+    """
+    if compiling > 0:
+        return f" (+ {kernels:.1f} s compiling kernels, first run only)"
+    return f" (+ {kernels:.2f} s loading compiled kernels)" if kernels >= 0.005 else ""
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from crfmap.io.grid_files import load_grid
+    from crfmap.crf.inference.compiling import compile_timer
 
     if args.max_iter is not None and args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
     preset = _preset(args)
     solver = preset.solver()  # the preset's solver, each option the user gave replacing its setting
     schedule = SETTINGS[args.schedule or solver["schedule"]](damping=args.damping)
-    grid = load_grid(args.input, free_thresh=args.free_thresh, occupied_thresh=args.occupied_thresh,
-                     loader=args.loader)
-    result = preset.refine(grid, schedule=schedule,
-                           max_iter=solver["max_iter"] if args.max_iter is None else args.max_iter,
-                           tol=solver["tol"] if args.tol is None else args.tol,
-                           dtype=np.float32 if args.float32 else np.dtype(solver["dtype"]).type)
+    grid = load_input(args)
+    with compile_timer() as kernels, compile_timer(loading=False) as compiling:
+        result = preset.refine(grid, schedule=schedule,
+                               max_iter=solver["max_iter"] if args.max_iter is None else args.max_iter,
+                               tol=solver["tol"] if args.tol is None else args.tol,
+                               dtype=np.float32 if args.float32 else np.dtype(solver["dtype"]).type)
     nav2_view = save_map_output(result.beliefs, args.output, args)
-    print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, "
-          f"{result.seconds:.3f} s -> {args.output}: {nav2_view}")
+    print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, LBP {result.seconds:.3f} s"
+          f"{kernel_time(kernels.seconds, compiling.seconds)} -> {args.output}: {nav2_view}")
     return 0

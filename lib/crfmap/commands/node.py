@@ -3,7 +3,8 @@
 Examples::
 
     crfmap node refine                          # /map -> /map_refined, ROS 2 over Cyclone DDS
-    crfmap node map --bounds -20 -20 20 20      # /scan + /tf -> /map and /map_metadata
+    crfmap node map --bounds -20 -20 20 20      # /scan + /tf -> /map and /map_metadata (default preset)
+    crfmap node map --preset thesis             # the thesis's table [[10, 1], [1, 10]] (erases thin walls)
     crfmap node refine --backend rospy          # through a running roscore
 
 SIGINT (Ctrl-C) and SIGTERM end the node cleanly; it then prints what it did on stderr.
@@ -12,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 
+from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
 from crfmap.errors import InputError
 
 BACKENDS = ("dds", "rclpy", "rospy")
@@ -22,7 +24,8 @@ def add_parser(sub):
         "node", help="run crfmap as a live ROS node: refine maps, or map from scans and tf",
         description="A live ROS node. 'refine': subscribe to a nav_msgs/OccupancyGrid (e.g. slam_toolbox's /map), "
         "refine each new map with the default preset as 'crfmap infer' does, publish it with the same header and "
-        "info. 'map': subscribe to sensor_msgs/LaserScan and tf, map online, publish /map and /map_metadata. Map "
+        "info. 'map': subscribe to sensor_msgs/LaserScan and tf, map online with a preset (default: the default "
+        "preset, as 'crfmap infer'), publish /map and /map_metadata, and on stop the converged final map. Map "
         "topics are reliable + transient local (depth 1), scans best effort (sensor data).")
     modes = p.add_subparsers(dest="mode", metavar="MODE", required=True)
     refine = modes.add_parser("refine", help="refine each new OccupancyGrid and publish it")
@@ -42,9 +45,13 @@ def add_parser(sub):
                          help="frame to map in (default: the root of the tf tree, map when map -> odom is published)")
     mapping.add_argument("--radius", type=float, default=4.0, metavar="M",
                          help="LBP runs within this distance of the laser after each scan (default 4)")
-    mapping.add_argument("--margin", type=int, default=3, metavar="CELLS",
-                         help="only cells within CELLS of an observed cell take part (default 3; -1: every cell, "
-                         "the thesis's model)")
+    mapping.add_argument("--preset", choices=list(PRESETS), default=DEFAULT_PRESET,
+                         help=f"the CRF's configuration, as for 'crfmap infer' (crfmap.crf.presets; default "
+                         f"{DEFAULT_PRESET}): " + "; ".join(f"{name}: {p.purpose}" for name, p in PRESETS.items()))
+    mapping.add_argument("--margin", type=int, default=None, metavar="CELLS",
+                         help="only cells within CELLS of an observed cell take part (default: the preset's, "
+                         + ", ".join(f"{name} {'every cell' if p.margin is None else p.margin}"
+                                     for name, p in PRESETS.items()) + "; -1: every cell, the thesis's model)")
     mapping.add_argument("--scan-log", default=None, metavar="FILE",
                          help="write one line per integrated scan: stamp [ns] and laser pose x y yaw in the fixed "
                          "frame (what the published map holds)")
@@ -69,7 +76,7 @@ def _check(args):
         if not (xmin < xmax and ymin < ymax):
             raise InputError("--bounds", f"need XMIN < XMAX and YMIN < YMAX, got {' '.join(f'{v:g}' for v in args.bounds)}")
         check_number("--radius", args.radius, low=0.0, low_open=True)
-        if args.margin < -1:
+        if args.margin is not None and args.margin < -1:
             raise InputError("--margin", f"must be -1 or a whole number of cells, got {args.margin}")
     if args.domain is not None and args.backend != "dds":
         raise InputError("--domain", f"applies to the dds backend only (the {args.backend} backend has its own setup)")
@@ -95,7 +102,9 @@ def make_node(args):
 
     if args.mode == "refine":
         return RefineNode(args.input, args.output, period=args.period)
-    options = {"radius": args.radius, "margin": None if args.margin == -1 else args.margin}
+    options = {"preset": args.preset, "radius": args.radius}
+    if args.margin is not None:  # else the preset's own
+        options["margin"] = None if args.margin == -1 else args.margin
     return MapNode(args.bounds, args.resolution, scan_topic=args.scan, map_topic=args.map,
                    metadata_topic=args.metadata, fixed_frame=args.fixed_frame, period=args.period,
                    mapper_options=options, scan_log=args.scan_log)

@@ -78,7 +78,7 @@ def offered_qos(topic):
                QosTime(0, 0), QosLiveliness.AUTOMATIC, QosTime(0, 0), False)
 
 
-def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
+def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble", progress=False):
     """Write a :class:`~crfmap.recording.Recording` as a ROS2 bag folder or a ROS1 ``.bag`` file.
 
     Parameters
@@ -92,6 +92,8 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
     distro : {'humble', 'jazzy'}
         The rosbag2 whose files to write: Humble's (default; metadata version 5, sqlite3 schema 3;
         every later rosbag2 reads them) or Jazzy's (version 9, schema 4; Humble cannot read them).
+    progress : bool
+        Show a tqdm bar of the messages written (seconds for a log of a few thousand scans).
 
     Notes
     -----
@@ -133,7 +135,8 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
         topics = {}
         for _, topic, msgtype, _ in messages:
             topics.setdefault(topic, Topic(topic, msgtype, store, [offered_qos(topic)]))
-        serialized = [(ns, topic, store.serialize_cdr(msg, msgtype)) for ns, topic, msgtype, msg in messages]
+        serialized = [(ns, topic, store.serialize_cdr(msg, msgtype))
+                      for ns, topic, msgtype, msg in _bar(messages, progress)]
         with atomic_dir(path) as tmp:
             tmp.mkdir()
             write_rosbag2(tmp, path.name, serialized, topics, storage, distro)
@@ -143,8 +146,17 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble"):
         with atomic_path(path) as tmp:
             tmp.unlink()  # rosbags' writer refuses an existing file
             with Rosbag1Writer(tmp) as writer:
-                _write_all(writer, messages, store, store.serialize_ros1)
+                _write_all(writer, _bar(messages, progress), store, store.serialize_ros1)
     return path
+
+
+def _bar(messages, progress):
+    """``messages``, through a tqdm bar when ``progress``."""
+    if not progress:
+        return messages
+    from tqdm.auto import tqdm
+
+    return tqdm(messages, desc="writing bag", unit="msg")
 
 
 def _header_ns(msg):
@@ -166,6 +178,25 @@ def _write_all(writer, messages, store, serialize):
         writer.write(connections[topic], ns, serialize(msg, msgtype))
 
 
+def clashing_scans(scans: ScanSet, laser_mount=(0.0, 0.0, 0.0)) -> list:
+    """Pairs (i, j) of scans whose stamps are the same nanosecond but whose robot poses differ.
+
+    A bag's tf tree holds one pose per time, so such a recording cannot be written (all-zero or
+    repeated stamps in a log; :func:`crfmap.commands.convert.stamps_from_order` restamps them).
+
+    >>> s = ScanSet(np.ones((3, 1), np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.0, 0, 0], [1, 0, 0], [1, 0, 0]]),
+    ...             np.array([0.0, 0.0, 1.0]))
+    >>> clashing_scans(s)
+    [(0, 1)]
+    """
+    scan_ns = np.array([to_ns(t) for t in scans.stamps], dtype=np.int64)
+    base_at_scans = compose(np.asarray(scans.laser_poses, np.float64), inverse(np.asarray(laser_mount, np.float64)))
+    order = np.argsort(scan_ns, kind="stable")
+    same = np.nonzero(np.diff(scan_ns[order]) == 0)[0]
+    return [(int(order[k]), int(order[k + 1])) for k in same
+            if not np.allclose(base_at_scans[order[k]], base_at_scans[order[k + 1]], atol=1e-9)]
+
+
 def _recording_messages(recording, scans, make):
     """Every message of the bag as (stamp [ns], topic, msgtype, message)."""
     odom = recording.odometry if recording.odometry is not None and len(recording.odometry) else None
@@ -178,13 +209,12 @@ def _recording_messages(recording, scans, make):
         raise InputError("recording", f"laser frame '{laser_frame}' equals the base frame but the laser mount is not zero")
     scan_ns = np.array([to_ns(t) for t in scans.stamps], dtype=np.int64)
     base_at_scans = compose(np.asarray(scans.laser_poses, np.float64), inverse(mount))
-    order = np.argsort(scan_ns, kind="stable")
-    same = np.nonzero(np.diff(scan_ns[order]) == 0)[0]
-    for k in same:
-        i, j = order[k], order[k + 1]
-        if not np.allclose(base_at_scans[i], base_at_scans[j], atol=1e-9):
-            raise InputError("recording", f"scans {i} and {j} share the stamp {scans.stamps[i]!r} s but not "
-                                          "the pose; a tf tree holds one pose per time")
+    clashes = clashing_scans(scans, mount)
+    if clashes:
+        i, j = clashes[0]
+        raise InputError(scans.source or "recording",
+                         f"{len(clashes)} scans share a stamp with another at a different pose (first: scans {i} "
+                         f"and {j}, {float(scans.stamps[i]):.9g} s); a tf tree holds one pose per time")
     scans_in_odom = scans.frame_id == odom_frame
     t0 = int(scan_ns.min())
     out = []

@@ -6,10 +6,16 @@ LBP messages between scans. :meth:`OnlineMapper.integrate` adds one scan's hits 
 builder's own ray casting), refreshes the observation of every cell a beam passed, and runs
 checkerboard LBP on the cells within ``radius`` of the laser, warm-started from the messages
 the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to
-convergence, which gives the offline result (:func:`crfmap.mapping.builder.build_grid` then
-:func:`crfmap.crf.inference.lbp.infer`) when LBP has one fixed point. Hard evidence never arises here: an
-arctan observation lies strictly inside (0, 1), and no link table (no all-zero row) makes such a
-cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
+convergence, which gives the preset's offline refinement of the same scans
+(``preset.refine(hits=..., passes=...)`` on :func:`crfmap.mapping.builder.count_hits`) when LBP has
+one fixed point.
+
+The CRF is a preset (:mod:`crfmap.crf.presets`), as for ``crfmap infer``: by default
+:data:`~crfmap.crf.presets.DEFAULT_PRESET` (certainty-scaled observations, a coupling
+below critical, LBP only near observations), so walls seen many times stay; ``preset="thesis"``
+is the thesis's table [[10, 1], [1, 10]] over the whole grid. Hard evidence never arises here:
+every preset's observation lies strictly inside (0, 1), and no link table (no all-zero row) makes
+such a cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet
@@ -24,16 +30,16 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
-from numba import njit
 
 from crfmap.checks import check_number
 from crfmap.crf.engine.incremental import IncrementalLBP
 from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.inference.result import LBPResult
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
+from crfmap.crf.presets import DEFAULT_PRESET, Preset, custom_preset, get_preset, temper
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.mapping import builder
@@ -41,17 +47,37 @@ from crfmap.recording import ScanSet
 
 DEFAULT_RADIUS = 4.0  # [m] bounded LBP runs on the cells within this distance of the laser
 DEFAULT_MAX_ITER = 16  # LBP iterations per scan at most
+PRESET_MARGIN = "preset"  # margin= this: the preset's own margin (None would mean: every cell sends)
 
 
-@njit(cache=True, nogil=True)
-def _arctan_observations(cells, occupied, empty):
-    """P = 0.5 + atan(occupied - empty) / pi (thesis eq. 16) of the cells (x, y) = ``cells[i]`` a scan touched."""
-    out = np.empty(cells.shape[0])
-    for i in range(cells.shape[0]):
-        x = cells[i, 0]
-        y = cells[i, 1]
-        out[i] = 0.5 + math.atan(occupied[y, x] - empty[y, x]) / math.pi
-    return out
+def mapper_preset(preset=None, hidden=None, link=None, pairing=None, margin=PRESET_MARGIN) -> Preset:
+    """The preset an :class:`OnlineMapper` runs: named or given, or a custom one of ``hidden``/``link``/``pairing``.
+
+    ``margin`` other than :data:`PRESET_MARGIN` replaces the preset's margin (None: every cell sends).
+
+    >>> mapper_preset().name == DEFAULT_PRESET, mapper_preset("thesis", margin=3).margin
+    (True, 3)
+    >>> mapper_preset(hidden=[[2, 1], [1, 2]]).name
+    'custom'
+    """
+    tables = hidden is not None or link is not None or pairing is not None
+    if tables and preset is not None:
+        raise InputError("preset", "hidden/link/pairing make a custom preset of their own: give them or a preset")
+    if tables:
+        chosen = custom_preset(DEFAULT_HIDDEN if hidden is None else check_table(hidden, "hidden"),
+                               DEFAULT_LINK if link is None else check_table(link, "link"),
+                               check_pairing("receiver" if pairing is None else pairing))
+    elif isinstance(preset, Preset):
+        chosen = preset
+    else:
+        chosen = get_preset(DEFAULT_PRESET if preset is None else preset)
+    if isinstance(margin, str) and margin == PRESET_MARGIN:
+        return chosen
+    if margin is not None and not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool)
+                                   and margin >= 0):
+        raise InputError("margin", f"must be None, {PRESET_MARGIN!r} or a non-negative whole number of cells, "
+                                   f"got {margin!r}")
+    return replace(chosen, margin=None if margin is None else int(margin))
 
 
 @dataclass
@@ -72,7 +98,13 @@ class OnlineMapper:
     hits : crfmap.mapping.builder.HitCounter
         The grid and the laser's geometry, and the hit counts (fresh, or holding earlier scans);
         :meth:`for_scans` and :meth:`for_sensor` make one.
-    hidden, link : 2x2 tables (see :mod:`crfmap.crf.model.potentials`)
+    preset : None, str or crfmap.crf.presets.Preset
+        The CRF: its observation model, hidden and link tables, pairing, margin and temperature
+        (None: :data:`~crfmap.crf.presets.DEFAULT_PRESET`; a name from
+        :data:`~crfmap.crf.presets.PRESETS`, e.g. "thesis").
+    hidden, link, pairing : optional
+        Tables (see :mod:`crfmap.crf.model.potentials`) that make a custom preset instead
+        (:func:`~crfmap.crf.presets.custom_preset`: the arctan grid's P through ``link``).
     radius : float
         [m] LBP runs on the cells whose centres lie within this distance of the laser.
     max_iter : int
@@ -80,27 +112,28 @@ class OnlineMapper:
     tol : float
         Largest message change that counts as settled.
     dtype : np.float32 or np.float64
-    pairing : "receiver" or "oriented"
-    margin : None or int
-        [cells] With a margin, only cells within ``margin`` cells (Chebyshev distance) of a cell
-        some beam has observed send messages, as with ``region=near_known(grid, margin)`` in
-        :func:`crfmap.crf.inference.lbp.infer`: gaps and occlusions up to ``margin`` cells deep are filled
-        and the unexplored rest stays unknown. None: every cell in the disc sends (the thesis's
-        model; with a strong coupling it fills unexplored space with its border's state).
+    margin : "preset", None or int
+        [cells] The preset's margin ("preset", the default) or another: only cells within
+        ``margin`` cells (Chebyshev distance) of a cell some beam has observed send messages, as
+        with ``region=near_known(grid, margin)`` in :func:`crfmap.crf.inference.lbp.infer`: gaps
+        and occlusions up to ``margin`` cells deep are filled and the unexplored rest stays
+        unknown (exactly 0.5, as the preset's offline refinement leaves it). None: every cell in
+        the disc sends (the thesis's model; with a strong coupling it fills unexplored space with
+        its border's state).
     """
 
-    def __init__(self, hits: builder.HitCounter, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, *, radius=DEFAULT_RADIUS,
-                 max_iter=DEFAULT_MAX_ITER, tol=1e-4, dtype=np.float32, pairing="receiver", margin=None):
+    def __init__(self, hits: builder.HitCounter, preset=None, *, hidden=None, link=None, pairing=None,
+                 margin=PRESET_MARGIN, radius=DEFAULT_RADIUS, max_iter=DEFAULT_MAX_ITER, tol=1e-4, dtype=np.float32):
         if not isinstance(hits, builder.HitCounter):
             raise InputError("hits", f"expected a crfmap.mapping.builder.HitCounter, got {type(hits).__name__}")
-        self.hidden = check_table(hidden, "hidden")
-        self.link = check_table(link, "link")
-        self.pairing = check_pairing(pairing)
+        self.preset = mapper_preset(preset, hidden, link, pairing, margin)
+        self.hidden, self.link, self.pairing = self.preset.hidden, self.preset.link, self.preset.pairing
         check_number("radius", radius, low=0.0, low_open=True)
         if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
             raise InputError("max_iter", f"must be a positive integer, got {max_iter!r}")
         check_number("tol", tol, low=0.0)
-        self.lbp = IncrementalLBP(hits.height, hits.width, self.hidden, self.link, dtype, self.pairing, margin)
+        self.lbp = IncrementalLBP(hits.height, hits.width, self.hidden, self.link, dtype, self.pairing,
+                                  self.preset.margin)
         self.hits = hits
         self.radius = float(radius)
         self.max_iter = int(max_iter)
@@ -140,7 +173,10 @@ class OnlineMapper:
         """Add one scan (``ranges`` [m], REP 117) taken at ``laser_pose`` (x, y, yaw) in the map frame."""
         t0 = time.perf_counter()
         cells = self.hits.add_scan(ranges, laser_pose)  # checks its input
-        self.lbp.set_observations(cells, _arctan_observations(cells, self.hits.occupied, self.hits.empty))
+        if len(cells):  # (a scan of no usable beam touches none; Preset.observation refuses an empty row)
+            xs, ys = cells[:, 0], cells[:, 1]
+            observed = self.preset.observation(hits=self.hits.occupied[ys, xs], passes=self.hits.empty[ys, xs])
+            self.lbp.set_observations(cells, np.ascontiguousarray(observed, np.float64))
         disc = self._disc((laser_pose[0] - self.origin[0]) / self.resolution,
                           (laser_pose[1] - self.origin[1]) / self.resolution)
         changes = self.lbp.run(self.max_iter, self.tol, threads, rows=disc)
@@ -175,11 +211,15 @@ class OnlineMapper:
             seconds[i] = self.integrate(scans.ranges[i], scans.laser_poses[i], threads=threads).seconds
         return seconds
 
-    def finish(self, tol=None, max_iter=1000, threads=None) -> LBPResult:
-        """LBP on the whole grid from the current messages until ``tol`` (default: the mapper's)."""
+    def finish(self, tol=None, max_iter=None, threads=None) -> LBPResult:
+        """LBP on the whole grid from the current messages until ``tol``: the preset's offline refinement.
+
+        ``tol`` and ``max_iter`` default to the preset's own (what :meth:`Preset.refine` runs to).
+        """
         import numba
 
-        tol = self.tol if tol is None else float(tol)
+        tol = self.preset.tol if tol is None else float(tol)
+        max_iter = self.preset.max_iter if max_iter is None else int(max_iter)
         threads = numba.get_num_threads() if threads is None else int(threads)
         t0 = time.perf_counter()
         changes = np.asarray(self.lbp.run(max_iter, tol, threads), float)
@@ -208,8 +248,22 @@ class OnlineMapper:
         return near_cells(observed, self.margin)
 
     def beliefs(self) -> OccupancyGrid:
-        """The current LBP beliefs P(occupied) of every cell."""
-        return self._grid(np.clip(self.lbp.beliefs(), 0.0, 1.0), model="crf-online")
+        """The current LBP beliefs P(occupied) of every cell, as the preset's refinement reports them.
+
+        Outside the preset's :meth:`region` a cell keeps its observation (0.5: never observed), a preset's
+        evidence gate (:mod:`crfmap.crf.model.gating`) reads each cell's own counts inside it, and a preset
+        temperature other than 1 tempers the whole map, as :meth:`crfmap.crf.presets.Preset.refine` does.
+        """
+        probability = np.clip(self.lbp.beliefs(), 0.0, 1.0)
+        region = None if self.margin is None else self.region()
+        if region is not None:  # cells next to a sender receive messages but are outside the refinement
+            probability[~region] = 0.5
+        if self.preset.gate is not None:
+            gated = self.preset.gate.apply(probability, hits=self.hits.occupied, passes=self.hits.empty)
+            probability = gated if region is None else np.where(region, gated, probability)
+        if self.preset.temperature != 1.0:
+            probability = temper(probability, self.preset.temperature)
+        return self._grid(probability, model="crf-online", preset=self.preset.name)
 
     def messages(self) -> np.ndarray:
         """The current messages as probabilities, shape (4, H, W) (see :func:`crfmap.crf.inference.lbp.infer`)."""

@@ -6,7 +6,7 @@ ROS 2 message object by attribute (ROS 2 stamps have ``sec``/``nanosec``, ROS 1 
 ``secs``/``nsecs``), and builds its own message type from a :class:`GridMessage` it publishes.
 
 A message the node cannot use raises :class:`BadMessage` with a short ``kind`` (logged once
-per kind) and the reason: an OccupancyGrid whose data length is not width * height, whose
+per kind) and the reason: an OccupancyGrid that is empty (0 cells) or whose data length is not width * height, whose
 resolution is NaN or not positive, whose origin quaternion is not a rotation or whose values
 are outside -1 and 0..100; a LaserScan with a zero or non-finite angle increment or ranges
 that disagree with its angles; a transform with a non-unit quaternion.
@@ -163,7 +163,9 @@ def occupancy_grid(msg: GridMessage):
     from crfmap.checks import check_cells
 
     width, height, n = int(msg.width), int(msg.height), int(msg.data.size)
-    if n != width * height or n == 0:
+    if n == 0 and width * height == 0:  # consistent, but nothing to refine (a SLAM node before its first scan)
+        raise BadMessage("empty map", f"the map is empty ({width} x {height} cells, no data): nothing to refine")
+    if n != width * height:
         raise BadMessage("data length", f"{n} cells for a {width} x {height} grid (width * height = {width * height})")
     try:  # what crfmap infer refuses (crfmap --max-cells N, CRFMAP_MAX_CELLS), refused before any work
         check_cells("map", width, height)

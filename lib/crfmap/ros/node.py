@@ -7,8 +7,10 @@
   only the newest is refined, stale ones are dropped, not queued.
 - :class:`MapNode` subscribes to sensor_msgs/LaserScan and tf, places each scan at its own
   stamp once tf covers it (:class:`crfmap.ros.tf_buffer.TfBuffer`), integrates it with
-  :class:`crfmap.mapping.OnlineMapper`, and publishes the beliefs on ``/map`` and
-  ``/map_metadata`` at most once per ``period``. Every scan is accounted for: received,
+  :class:`crfmap.mapping.OnlineMapper` under a preset (the default preset unless told otherwise, as
+  ``crfmap infer``), and publishes the beliefs on ``/map`` and ``/map_metadata`` at most once per
+  ``period``; when it stops it runs LBP on the whole map to convergence and publishes that final map
+  (the preset's offline refinement of the integrated scans, :meth:`MapNode.finish`). Every scan is accounted for: received,
   integrated, skipped (with the reason) or still waiting for tf, and the backend's count of scans
   lost in transport (best-effort samples dropped, :meth:`DdsBackend.lost`) joins the summary; a
   ``scan_log`` file gets one line per integrated scan (stamp [ns], laser pose x y yaw in the fixed
@@ -28,7 +30,6 @@ import sys
 import time
 from collections import deque
 from dataclasses import dataclass
-
 
 from crfmap.errors import InputError
 from crfmap.ros import qos
@@ -139,7 +140,8 @@ class MapNode:
     ``bounds`` (xmin, ymin, xmax, ymax) [m] in the fixed frame and ``resolution`` [m] fix the grid
     (the online mapper does not grow); ``fixed_frame`` None takes the root of the tf tree at the
     first scan (map when a SLAM or localiser publishes map -> odom, else odom). ``mapper_options``
-    go to :meth:`crfmap.mapping.OnlineMapper.for_sensor` (radius, max_iter, margin, ...).
+    go to :meth:`crfmap.mapping.OnlineMapper.for_sensor` (preset, radius, max_iter, margin, ...; the
+    default preset unless ``preset`` names another).
     """
 
     def __init__(self, bounds, resolution=0.05, scan_topic="/scan", map_topic="/map", metadata_topic="/map_metadata",
@@ -254,6 +256,20 @@ class MapNode:
             return max(self.last_publish + self.period - now, 0.0)
         return IDLE_SECONDS
 
+    def finish(self):
+        """Converge the whole map (LBP until the preset's tol) and publish it: the node's final map.
+
+        Equal, to that tol, to the preset's offline refinement of the integrated scans; one log line.
+        """
+        if self.mapper is None:
+            return
+        result = self.mapper.finish()
+        out = grid_out(result.beliefs, self.last_stamp_ns, self.fixed_frame)
+        self.publishers["map"](out)
+        self.publishers["metadata"](out)
+        self.log(f"final map ({self.mapper.preset.name} preset, {self.integrated} scans): whole-grid LBP "
+                 f"{result.summary()}, {result.seconds:.2f} s -> {self.map_topic}")
+
     def summary(self) -> str:
         return (f"{self.integrated} scans integrated of {self.received} received, {len(self.waiting)} still waiting "
                 f"for tf; skipped: {self.bad.summary()}")
@@ -291,5 +307,6 @@ def spin(node, backend, stop, log=log_line):
         if stop.is_set():
             break
         wait = node.step(time.monotonic())
+    getattr(node, "finish", lambda: None)()  # the map node's converged final map, while the backend still runs
     lost = getattr(backend, "lost", dict)()
     return node.summary() + "".join(f"; lost in transport on {topic}: {n}" for topic, n in lost.items() if n)

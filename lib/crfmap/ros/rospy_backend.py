@@ -8,14 +8,19 @@ environment can use Debian's ROS 1 without a ROS workspace.
 """
 from __future__ import annotations
 
+import gc
 import os
 import sys
 import time
+import warnings
 
 from crfmap.errors import InputError
 from crfmap.ros.messages import stamp_parts
 
 DEBIAN_DIST_PACKAGES = "/usr/lib/python3/dist-packages"
+# rospy (Debian's 1.15/1.16) calls Condition.notifyAll and leaves XML-RPC sockets to the garbage collector: warnings
+# about ROS's code, not crfmap's, that would end every node run with lines a user cannot act on
+ROS1_MODULES = r"(rospy|rosgraph|roslib|genpy|rosmaster)(\.|$)"
 
 
 def import_rospy():
@@ -60,6 +65,8 @@ class RospyBackend:
     def __init__(self, name="crfmap_node"):
         self.rospy = import_rospy()
         self.types = _types()
+        for category in (DeprecationWarning, ResourceWarning):
+            warnings.filterwarnings("ignore", category=category, module=ROS1_MODULES)
         # rospy's own signal handlers would shut it down mid-refinement; the command handles SIGINT/SIGTERM
         self.rospy.init_node(name, anonymous=False, disable_signals=True)
         self.handles = []
@@ -95,4 +102,8 @@ class RospyBackend:
         for handle in self.handles:
             handle.unregister()
         self.handles.clear()
-        self.rospy.signal_shutdown("crfmap node stopped")
+        with warnings.catch_warnings():  # rospy's shutdown and its sockets collected now, not at some later line
+            warnings.simplefilter("ignore", ResourceWarning)
+            warnings.simplefilter("ignore", DeprecationWarning)
+            self.rospy.signal_shutdown("crfmap node stopped")
+            gc.collect()

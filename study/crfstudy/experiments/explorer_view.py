@@ -74,6 +74,7 @@ class ExplorerView:
         self.figure = Figure(figsize=FIGSIZE, dpi=dpi)
         self.canvas = FigureCanvasAgg(self.figure)
         self._layout_for = None  # (shape, bounds) the background was drawn for
+        self._truth_shown = None  # the truth grid the background holds (a scene of the same extent may differ)
         self._background = None
         self._artists = {}
         self._build()
@@ -125,12 +126,17 @@ class ExplorerView:
         for ax in self.axes[:3]:
             ax.set_xlim(bounds[:2])
             ax.set_ylim(bounds[2:])
-        self._artists["truth"].set_data(truth.probability)
         ConstrainedLayoutEngine().execute(self.figure)  # once per scene, not on every redraw
+        self._layout_for = (truth.shape, bounds)
+        self._show_truth(truth)
+
+    def _show_truth(self, truth):
+        """Put ``truth`` in its panel and redraw the background that holds it (a scene change)."""
+        self._artists["truth"].set_data(truth.probability)
+        self._truth_shown = truth.probability.copy()
         if self.live:
             self.canvas.draw()  # the changing artists are animated: not in the background
             self._background = self.canvas.copy_from_bbox(self.figure.bbox)
-        self._layout_for = (truth.shape, bounds)
 
     # --- updating (every change) ------------------------------------------------------------------
     def update(self, ex):
@@ -158,6 +164,8 @@ class ExplorerView:
             a[name if name == "suptitle" else name + "_title"].set_text(text)
         if self._layout_for != (truth.shape, _bounds(truth)):
             self._layout(truth)
+        elif not np.array_equal(self._truth_shown, truth.probability):  # another scene of the same extent
+            self._show_truth(truth)
         if self.live:
             self._blit()
         return self

@@ -20,6 +20,7 @@ import numpy as np
 
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
 from crfmap.mapping.builder import build_grid
 from crfmap.mapping.online import OnlineMapper
@@ -117,15 +118,20 @@ def versus_offline(scans, resolution, hidden, tol, max_iter=FINAL_MAX_ITER) -> t
 
 def near_versus_offline(scans, resolution, offline_grid, hidden, mapper_near, tol, max_iter=FINAL_MAX_ITER,
                         cold_max_iter=COLD_MAX_ITER) -> dict:
-    """Near observations only: ``finish()`` against ``infer(region=mapper.region())``, with ``hidden`` and the defaults.
+    """Near observations only: ``finish()`` against ``infer(region=mapper.region())``, with ``hidden`` and the mapper's.
 
-    ``mapper_near`` has already mapped ``scans`` with the default tables and a margin (it is
-    finished here); a second mapper with the same margin maps them again with ``hidden``. The
-    default tables have no single fixed point, so for them we report the share of region cells
-    on the same side of 0.5, and how far offline LBP warm-started from the online messages moves; the cold
-    offline run with the default tables stops after ``cold_max_iter`` iterations (its last measured
-    message change is reported).
+    ``mapper_near`` has already mapped ``scans`` with tables on the arctan grid (the thesis preset,
+    ``preset="thesis"``, or custom tables) and a margin (it is finished here); a second mapper with
+    the same margin maps them again with ``hidden``. The thesis's tables have no single fixed point,
+    so for them we report the share of region cells on the same side of 0.5, and how far offline LBP
+    warm-started from the online messages moves; the cold offline run with those tables stops after
+    ``cold_max_iter`` iterations (its last measured message change is reported). Beliefs are
+    compared inside the region: outside it the mapper reports the observation (unknown), as
+    :meth:`crfmap.crf.presets.Preset.refine` does, where ``infer`` reports what the region sent.
     """
+    if mapper_near.preset.scaled:
+        raise InputError("mapper_near", f"the {mapper_near.preset.name} preset observes counts, not the arctan "
+                         "grid infer() is given here: map with preset='thesis' or custom tables")
     margin = mapper_near.margin
     weak = OnlineMapper.for_scans(scans, resolution, hidden=hidden, margin=margin)
     weak.run(scans)
@@ -133,15 +139,16 @@ def near_versus_offline(scans, resolution, offline_grid, hidden, mapper_near, to
     offline_weak = infer(offline_grid, hidden, DEFAULT_LINK, tol=tol, max_iter=max_iter, dtype=np.float32,
                          region=weak.region())
     final_default = mapper_near.finish(tol=tol, max_iter=max_iter)
-    offline_default = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=tol, max_iter=cold_max_iter,
+    tables = mapper_near.hidden, mapper_near.link
+    offline_default = infer(offline_grid, *tables, tol=tol, max_iter=cold_max_iter,
                             dtype=np.float32, region=mapper_near.region())
-    warm_default = infer(offline_grid, DEFAULT_HIDDEN, DEFAULT_LINK, tol=tol, max_iter=max_iter, dtype=np.float32,
+    warm_default = infer(offline_grid, *tables, tol=tol, max_iter=max_iter, dtype=np.float32,
                          region=mapper_near.region(), messages=mapper_near.messages())
     inside = mapper_near.region()
     return {
         "margin_cells": margin, "region_cells": int(inside.sum()),
         "weak_max_abs_belief_difference": float(np.abs(final_weak.beliefs.probability
-                                                       - offline_weak.beliefs.probability).max()),
+                                                       - offline_weak.beliefs.probability)[weak.region()].max()),
         "weak_finish_iterations": final_weak.iterations, "weak_offline_iterations": offline_weak.iterations,
         "weak_converged": bool(final_weak.converged and offline_weak.converged),
         "default_finish_converged": final_default.converged,
@@ -152,7 +159,7 @@ def near_versus_offline(scans, resolution, offline_grid, hidden, mapper_near, to
         "default_same_state_fraction": float(np.mean((final_default.beliefs.probability[inside] > 0.5)
                                                      == (offline_default.beliefs.probability[inside] > 0.5))),
         "default_max_abs_difference_to_offline_warm_started_from_online": float(
-            np.abs(final_default.beliefs.probability - warm_default.beliefs.probability).max()),
+            np.abs(final_default.beliefs.probability - warm_default.beliefs.probability)[inside].max()),
     }
 
 

@@ -31,7 +31,7 @@ from pathlib import Path
 
 # the distributions the tasks import (tests/repro/test_warmup.py checks it): `make venv` installs these first, then
 # warms the cache while pip installs the rest (run as a script, ``--requirements`` names them with pyproject's versions)
-NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm", "scipy")
+NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm", "scipy", "lazy-loader")
 # numba modules with cache=True the LBP calls use
 KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf/engine/messages.py",
                   "crf/inference/_plain_kernels.py")
@@ -47,8 +47,8 @@ STUDY_NUMBA_SOURCES = ("bench/machine.py", "experiments/background.py")
 def requirements(pyproject=CHECKOUT / "pyproject.toml") -> list[str]:
     """The requirement strings of :data:`NEEDS` as ``pyproject`` states them (one place for the versions).
 
-    >>> [r.split(">")[0] for r in requirements()]
-    ['numpy', 'numba', 'pyyaml', 'pillow', 'tqdm', 'scipy']
+    >>> [r.split(">")[0].lower().replace("_", "-") for r in requirements()]
+    ['numpy', 'numba', 'pyyaml', 'pillow', 'tqdm', 'scipy', 'lazy-loader']
     """
     import re
     import tomllib
@@ -249,6 +249,28 @@ def _closed_loop():
     explore(enclosed_boxes("train", size=20), "raw", ExploreSettings(max_scans=3, robot_radius=None))
 
 
+def _peers():
+    """The published peers ``crfmap evaluate`` scores: OctoMap's clamped update and Bayesian Hilbert maps.
+
+    Without this task the first ``crfmap evaluate`` after ``make venv`` compiled six kernels
+    (``octomap._octomap_update``, ``_ray_cells``; ``hilbert._features``, ``_fit_batch``, ``_lam``,
+    ``_predict``) that no other task reaches.
+    """
+    import numpy as np
+
+    from crfmap.assess.peers import PEERS, peer_rows
+    from crfmap.assess.scansplit import scan_split
+    from crfmap.recording import ScanSet
+
+    rng = np.random.default_rng(0)
+    n, beams = 6, 90
+    ranges = rng.uniform(0.5, 3.0, (n, beams)).astype(np.float32)
+    ranges[:, ::17] = np.inf  # no returns
+    poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
+    scans = ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+    peer_rows(scan_split(scans, 0.1), list(PEERS))  # the halves are strided views, as on a real log
+
+
 def _gibbs():
     """The background chapter's Gibbs sampler (notebook 01): chains and lattices share one kernel."""
     from crfstudy.experiments.background import gibbs_ising
@@ -277,6 +299,7 @@ def all_tasks() -> dict:
         "simulator": (_simulator, 9.5),
         "bandwidth": (_bandwidth, 0.5),
         "scoring": (_scoring, 1.5),
+        "peers": (_peers, 2.0),
         "gibbs": (_gibbs, 0.5),
         "closed loop": (_closed_loop, 3.0),
     }

@@ -77,7 +77,7 @@ def test_online_then_finish_reaches_the_offline_fixed_point():
 def test_near_observations_compare_on_the_mappers_region():
     scans = room_scans()
     _, offline_grid = versus_offline(scans, 0.1, WEAK, tol=1e-7)
-    near = OnlineMapper.for_scans(scans, 0.1, margin=2, radius=1.5, max_iter=4)
+    near = OnlineMapper.for_scans(scans, 0.1, preset="thesis", margin=2, radius=1.5, max_iter=4)
     near.run(scans)
     region = near.region()
     numbers = near_versus_offline(scans, 0.1, offline_grid, WEAK, near, tol=1e-7)

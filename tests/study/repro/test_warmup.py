@@ -73,4 +73,4 @@ def test_the_warm_up_runs_with_only_the_distributions_installed_first():
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr[-2000:]
     print("imports refused, and survived:", run.stdout.strip().splitlines()[-1])  # optional ones (numba's cffi)
-    assert [r.split(">")[0] for r in warmup.requirements()] == list(warmup.NEEDS)
+    assert [r.split(">")[0].lower().replace("_", "-") for r in warmup.requirements()] == list(warmup.NEEDS)

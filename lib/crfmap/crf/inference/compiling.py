@@ -1,16 +1,26 @@
-"""Say so when a call is about to compile numba kernels (an empty cache: tens of seconds of silence otherwise).
+"""Say so when a call is about to compile numba kernels (an empty cache: tens of seconds of silence otherwise),
+and measure how long compiling took, so it is never reported as the time of the work itself.
 
 A dispatcher needs compiling when it has no compiled signature in this process and numba's
 on-disk cache holds no entry for its current source. Checking costs one small file read per
-dispatcher, once per process.
+dispatcher, once per process. :func:`compile_timer` measures the time spent holding numba's
+compiler lock (compiling, or loading a compiled kernel from the disk cache) within a block.
 
 >>> from crfmap.crf.inference import _plain_kernels as K
 >>> isinstance(needs_compiling(K._send_rows), bool)
 True
+>>> with compile_timer() as compiled:
+...     pass
+>>> compiled.seconds
+0.0
 """
 from __future__ import annotations
 
+import contextlib
 import sys
+import time
+
+from numba.core import event
 
 MESSAGE = "compiling LBP kernels (first run only)..."
 _checked = set()  # dispatchers known to be compiled or cached in this process
@@ -64,3 +74,35 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fu
     if said:
         _announced.add(key)
     return said
+
+
+class CompileTime(event.Listener):
+    """Seconds numba spent compiling or loading cached kernels inside a :func:`compile_timer` block (``seconds``)."""
+
+    def __init__(self):
+        self.seconds = 0.0
+        self._depth = 0
+        self._start = 0.0
+
+    def on_start(self, event):  # nested acquisitions of the (re-entrant) lock count once
+        if self._depth == 0:
+            self._start = time.perf_counter()
+        self._depth += 1
+
+    def on_end(self, event):
+        self._depth -= 1
+        if self._depth == 0:
+            self.seconds += time.perf_counter() - self._start
+
+
+@contextlib.contextmanager
+def compile_timer(loading=True):
+    """Measure the time numba spends on kernels inside the block (``.seconds``).
+
+    ``loading`` True: the time it holds its compiler lock, compiling kernels or loading them from the
+    disk cache (all time that is not the work itself); False: compiling only. Nested timers each see
+    the whole time of their own block.
+    """
+    timer = CompileTime()
+    with event.install_listener("numba:compiler_lock" if loading else "numba:compile", timer):
+        yield timer

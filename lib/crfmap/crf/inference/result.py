@@ -28,13 +28,15 @@ class LBPResult:
         The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
         The whole-grid fast kernel unpacks them on first read (most callers never do).
     seconds : float
-        Wall time of the inference (compilation excluded after the first call).
+        Wall time of the inference, without the time numba spent compiling kernels or loading them
+        from its disk cache (a first call's wait: ``timings["compile"]``).
     kernel : str
         "fast" or "plain": which kernels ran.
     timings : dict
         Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
         messages ("unpack") on the whole-grid fast kernel, and on the coarse levels of
-        ``init="coarse"`` ("coarse"); empty for the other paths.
+        ``init="coarse"`` ("coarse"); "compile": seconds numba spent compiling or loading kernels
+        during the call (not in ``seconds``; absent when none); "pack" and "iterate" include it.
     """
 
     beliefs: OccupancyGrid
