@@ -1,7 +1,7 @@
 """The closed-loop study (thesis sec. 4.3, issue 37 part 3): runs, the paired table over floors, one run's picture.
 
-Every onboard map kind explores the same scenes with the same seed (:func:`crfmap.sim.exploration.explore`),
-then the navigation task plans on its finished map (:func:`crfmap.sim.exploration.navigation_task`).
+Every onboard map kind explores the same scenes with the same seed (:func:`crfstudy.closed_loop.exploration.explore`),
+then the navigation task plans on its finished map (:func:`crfstudy.closed_loop.exploration.navigation_task`).
 :func:`paired_table` gives each kind's mean per metric and its paired difference to the raw grid with a
 bootstrap interval over the scenes (:func:`crfmap.assess.paired.paired_difference`, seeded).
 
@@ -17,8 +17,8 @@ import numpy as np
 
 from crfmap.assess.paired import paired_difference
 from crfmap.errors import InputError
-from crfmap.sim.exploration import ExploreSettings, explore, map_scores, navigation_task
-from crfmap.sim.onboard import ONBOARD_MAPS
+from crfstudy.closed_loop.exploration import ExploreSettings, explore, map_scores, navigation_task
+from crfstudy.closed_loop.onboard import ONBOARD_MAPS
 from crfmap.world.office import office_floor
 from crfmap.world.scenes import make_scene
 
@@ -64,7 +64,7 @@ def _record(label, kind, run, scene, radius, n_pairs, settings, seed):
 def run_closed_loop(scenes, kinds=None, settings: ExploreSettings | None = None, seed=0, n_pairs=20,
                     thesis_radius=None, keep=1, progress=None):
     """Explore every scene with every kind: (records, kept) where ``kept[label][kind]`` is the
-    :class:`~crfmap.sim.exploration.ExplorationRun` of the first ``keep`` scenes (for pictures).
+    :class:`~crfstudy.closed_loop.exploration.ExplorationRun` of the first ``keep`` scenes (for pictures).
 
     The thesis's scenes are small rooms for a point robot: they run with ``thesis_radius`` (None: the
     scene's own, 0) instead of ``settings.robot_radius``.

@@ -41,7 +41,7 @@ STUDY = CHECKOUT / "study" / "crfstudy"
 # every folder or module holding numba kernels the tasks below compile: a change to one re-warms
 NUMBA_SOURCES = ("crf", "crf/model", "crf/inference", "crf/engine", "mapping", "sim", "world/reachability.py",
                  "raycast.py", "assess/scansplit.py", "assess/block_bootstrap.py")
-STUDY_NUMBA_SOURCES = ("bench/machine.py", "experiments/background.py")
+STUDY_NUMBA_SOURCES = ("bench/machine.py", "experiments/background.py", "closed_loop")
 
 
 def requirements(pyproject=CHECKOUT / "pyproject.toml") -> list[str]:
@@ -243,7 +243,7 @@ def _scoring():
 
 def _closed_loop():
     """The closed loop's planner and costmap (notebook 11): a short exploration of a small thesis scene."""
-    from crfmap.sim.exploration import ExploreSettings, explore
+    from crfstudy.closed_loop.exploration import ExploreSettings, explore
     from crfmap.world.scenes import enclosed_boxes
 
     explore(enclosed_boxes("train", size=20), "raw", ExploreSettings(max_scans=3, robot_radius=None))

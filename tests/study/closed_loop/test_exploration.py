@@ -7,10 +7,10 @@ import pytest
 
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.sim.exploration import ExploreSettings, explore, map_scores, navigation_task, reachable_free_space
-from crfmap.sim.frontiers import costmap, frontiers, inflate, path_cost, plan_path, shortest_paths
+from crfstudy.closed_loop.exploration import ExploreSettings, explore, map_scores, navigation_task, reachable_free_space
+from crfstudy.closed_loop.frontiers import costmap, frontiers, inflate, path_cost, plan_path, shortest_paths
 from crfmap.sim.laser import Laser
-from crfmap.sim.onboard import ONBOARD_MAPS, make_onboard
+from crfstudy.closed_loop.onboard import ONBOARD_MAPS, make_onboard
 from crfmap.world.scene import Scene
 
 MOVES = [(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dx or dy]

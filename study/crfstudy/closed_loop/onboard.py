@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.checks import check_int
-from crfmap.crf.presets import DEFAULT_PRESET, get_preset, temper
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
 from crfmap.errors import InputError
 from crfmap.mapping.builder import HitCounter
 from crfmap.mapping.octomap import OctoMapUpdater
@@ -53,45 +53,19 @@ class RawGrid:
         return self.hits.grid().probability
 
 
-class _PresetOnlineMapper(OnlineMapper):
-    """The online mapper with a preset's observation (hits and passes through the preset) and tables.
-
-    ``OnlineMapper`` itself feeds LBP the arctan P through its link table; until it takes a preset,
-    this feeds the incremental LBP what ``preset.refine`` would: ``preset.observation(hits, passes)``.
-    """
-
-    def __init__(self, hits, preset, **options):
-        super().__init__(hits, preset.hidden, preset.link, pairing=preset.pairing, margin=preset.margin, **options)
-        self.preset = preset
-
-    def integrate(self, ranges, laser_pose, threads=1):
-        cells = self.hits.add_scan(ranges, laser_pose)
-        xs, ys = cells[:, 0], cells[:, 1]
-        self.lbp.set_observations(cells, self.preset.observation(hits=self.hits.occupied[ys, xs],
-                                                                 passes=self.hits.empty[ys, xs]))
-        disc = self._disc((laser_pose[0] - self.origin[0]) / self.resolution,
-                          (laser_pose[1] - self.origin[1]) / self.resolution)
-        self.lbp.run(self.max_iter, self.tol, threads, rows=disc)
-
-
 class OnlineCRF:
-    """The default preset's CRF kept fresh around the robot: bounded LBP on a disc after every scan."""
+    """A preset's CRF kept fresh around the robot (:class:`~crfmap.mapping.online.OnlineMapper`, the default preset):
+    bounded LBP on a disc after every scan; its beliefs read as the preset's refinement reads them (region, gate)."""
 
     def __init__(self, bounds, resolution, laser, preset=DEFAULT_PRESET, **mapper_options):
-        self.preset = get_preset(preset)
-        self.mapper = _PresetOnlineMapper(_counter(bounds, resolution, laser), self.preset, **mapper_options)
+        self.mapper = OnlineMapper(_counter(bounds, resolution, laser), preset, **mapper_options)
+        self.preset = self.mapper.preset
 
     def integrate(self, ranges, laser_pose) -> None:
-        self.mapper.integrate(_ranges(ranges), laser_pose)
+        self.mapper.integrate(_ranges(ranges), laser_pose, threads=1)
 
     def probability(self) -> np.ndarray:
-        p = self.mapper.beliefs().probability
-        observed = (self.mapper.hits.occupied > 0) | (self.mapper.hits.empty > 0)
-        outside = self.preset.region(observed)  # cells LBP never sends from keep their observation, as refine
-        if outside is not None:
-            p = np.where(outside, p, self.preset.observation(hits=self.mapper.hits.occupied,
-                                                             passes=self.mapper.hits.empty))
-        return temper(p, self.preset.temperature) if self.preset.temperature != 1.0 else p
+        return self.mapper.beliefs().probability
 
 
 class OctoMapGrid:

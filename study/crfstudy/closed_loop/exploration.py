@@ -2,7 +2,7 @@
 
 A round robot stands in a ground-truth scene with the project's laser (:func:`crfmap.sim.simulator.cast_rays`,
 range noise :func:`crfmap.sim.simulator.add_range_noise`). It repeats: scan, add the scan to its onboard
-map (:mod:`crfmap.sim.onboard`), read the map as nav2 does (:func:`crfmap.sim.frontiers.costmap`), pick
+map (:mod:`crfstudy.closed_loop.onboard`), read the map as nav2 does (:func:`crfstudy.closed_loop.frontiers.costmap`), pick
 the nearest reachable frontier by Dijkstra over the inflated map, and drive ``cells_per_scan`` cells of
 that path. Every step is checked against the *truth*: a step whose footprint would touch a true wall is
 a collision; the robot stays, scans and replans. A plan whose path touches a true wall is counted
@@ -31,9 +31,9 @@ import numpy as np
 from crfmap.checks import check_int, check_number
 from crfmap.errors import InputError
 from crfmap.mapping.builder import HitCounter
-from crfmap.sim.frontiers import FREE, LETHAL, UNKNOWN_READINGS, costmap, frontiers, path_to, plan_path, shortest_paths
+from crfstudy.closed_loop.frontiers import FREE, LETHAL, UNKNOWN_READINGS, costmap, frontiers, path_to, plan_path, shortest_paths
 from crfmap.sim.laser import Laser
-from crfmap.sim.onboard import make_onboard
+from crfstudy.closed_loop.onboard import make_onboard
 from crfmap.sim.simulator import add_range_noise, cast_rays
 from crfmap.world.reachability import footprint_offsets, pose_cell, reachable, traversable
 from crfmap.world.scene import Scene
@@ -189,7 +189,7 @@ def _nearest_frontier(cost, mask):
 
 def explore(scene: Scene, onboard="raw", settings: ExploreSettings | None = None, laser: Laser | None = None,
             seed=0) -> ExplorationRun:
-    """Explore ``scene`` with an ``onboard`` map (a key of :data:`crfmap.sim.onboard.ONBOARD_MAPS`).
+    """Explore ``scene`` with an ``onboard`` map (a key of :data:`crfstudy.closed_loop.onboard.ONBOARD_MAPS`).
 
     Deterministic: the range noise comes from ``np.random.default_rng(seed)``; ties between frontiers
     break by position. Returns an :class:`ExplorationRun`.
