@@ -15,12 +15,18 @@ so a number in the report is always the one the code produced:
 HTML comments (``<!-- ... -->``) are notes for the authors: they are removed before anything is filled,
 so a placeholder or a TODO inside one never reaches the report.
 
-The result is ``paper/generated/paper.md``. A placeholder whose file is missing renders as a
-visible "not generated" note, and :func:`build_paper` lists them. The paper is built only from full
-default runs: with ``strict`` (the default, and what the workflow's paper rule runs) a result made by a
-quick run or with non-default parameters (:func:`crfstudy.repro.provenance.problem`) stops the build
-with one line naming the file. ``python -m crfstudy.repro.paper`` is that build on the command line
-(exit status 2 and one stderr line on a refusal).
+The result is ``paper/generated/paper.md``. The paper is built only from full default runs, complete: with
+``strict`` (the default, and what the workflow's paper rule runs) a result made by a quick run or with non-default
+parameters (:func:`crfstudy.repro.provenance.problem`) stops the build with one line naming the file, a placeholder
+whose number, table, figure or build fact was not generated stops it with one line naming each missing item
+(:class:`ReportIncomplete`: a report with a hole is not a report), and so does a main text longer than
+:data:`WORD_LIMIT` words (:func:`main_text_words`). A draft (``strict=False``) renders each missing item as a
+visible "not generated" note and lists them at the end. ``python -m crfstudy.repro.paper`` is the strict build on the
+command line (exit status 2 and one stderr line per problem on a refusal).
+
+The speed goals table's ``make reproduce`` row is written by notebook 09 from the record of a run that finished
+before it, which a fresh clone does not have; the build replaces it with this run's own time
+(:func:`this_run_row`).
 """
 from __future__ import annotations
 
@@ -32,8 +38,9 @@ from pathlib import Path
 import sys
 
 from crfstudy import paths
+from crfmap import environment
 from crfmap.crf.presets import DEFAULT_PRESET
-from crfmap.errors import InputError
+from crfmap.errors import CrfmapError, InputError, one_line
 from crfmap.io.atomic import atomic_path
 from crfstudy.repro import provenance
 
@@ -43,6 +50,81 @@ PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build|missed):([^}|]+)(?:\|(
 
 def _relative(target: Path, start: Path) -> str:
     return Path(os.path.relpath(target, start)).as_posix()
+
+
+WORD_LIMIT = 8000  # words of the main text (everything before the appendix), the report's own limit
+APPENDIX = re.compile(r"^## Appendix", re.M)
+_RAW_BLOCK = re.compile(r"^```.*?^```\s*$", re.M | re.S)  # raw Typst and code blocks: layout, not text
+_IMAGE = re.compile(r"!\[([^\]]*)\]\([^)]*\)(\{[^}]*\})?")  # an image counts by its caption
+_TABLE_RULE = re.compile(r"^\|?[\s:|-]+\|[\s:|-]*$", re.M)  # a table's |---|---| line
+
+
+class ReportIncomplete(CrfmapError):
+    """The strict build met placeholders whose results were not generated; ``missing`` names each."""
+
+    def __init__(self, missing):
+        self.missing = list(missing)
+        super().__init__("; ".join(self.missing))
+
+
+def main_text_words(markdown: str) -> int:
+    r"""Words of a report's main text: everything before its first "## Appendix" heading, as a reader counts them.
+
+    Prose, headings, table cells and figure captions count (a word is a run of characters between spaces, the
+    way ``wc -w`` counts the PDF's text); raw Typst and code blocks, image paths, HTML comments and the "|"
+    and "---" of tables do not.
+
+    >>> main_text_words("# Title\n\nTwo words. ![A cap](f.png){width=5%}\n\n| a | b c |\n|---|---|\n"
+    ...                 "<!-- not counted -->\n```{=typst}\n#set text(size: 8pt)\n```\n## Appendix A\nmore words")
+    8
+    """
+    text = APPENDIX.split(COMMENT.sub("", markdown), maxsplit=1)[0]
+    text = _TABLE_RULE.sub(" ", _IMAGE.sub(r"\1", _RAW_BLOCK.sub(" ", text)))
+    return len([w for w in text.replace("|", " ").split() if w.strip("#*-_>")])
+
+
+_REPRODUCE_ROW = "make reproduce, previous run"
+
+
+def this_run_row(cells: list, seconds: float | None, what: str) -> list:
+    """A speed goals row (measurement, grid, value, goal) of ``make reproduce`` with this run's ``seconds``.
+
+    Rows of other measurements, and any row when ``seconds`` is None, come back unchanged.
+
+    >>> this_run_row(["make reproduce, previous run, notebooks summed [s]", "", None, "<= 300"], 251.4,
+    ...              "from its start to this report")
+    ['make reproduce, this run, from its start to this report [s]', '', 251, '<= 300']
+    >>> this_run_row(["kernel [Mcell/s]", "512^2", 1394, ">= 1000"], 251.4, "x")[2]
+    1394
+    """
+    if seconds is None or not str(cells[0]).startswith(_REPRODUCE_ROW):
+        return cells
+    return [f"make reproduce, this run, {what} [s]", cells[1], round(seconds), *cells[3:]]
+
+
+def this_run_seconds(notebook_seconds: float | None = None) -> tuple:
+    """(seconds, what) of this reproduction when the paper is built: the time since ``make reproduce`` started
+    (``$CRFMAP_REPRODUCE_STARTED``, set by make), else the executed notebooks' summed run times, else (None, "")."""
+    import time
+
+    started = environment.reproduce_started()
+    if started is not None:
+        return time.time() - started, "from its start to this report (venv, warm-up, notebooks)"
+    if notebook_seconds:
+        return float(notebook_seconds), "notebooks summed"
+    return None, ""
+
+
+def _this_run_table(text: str, seconds, what) -> str:
+    """The speed goals Markdown table with its ``make reproduce`` row set to this run's time."""
+    if seconds is None:
+        return text
+    lines = text.split("\n")
+    for i, line in enumerate(lines):
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.startswith("|") and cells[0].startswith(_REPRODUCE_ROW):
+            lines[i] = "| " + " | ".join(str(c) for c in this_run_row(cells, seconds, what)) + " |"
+    return "\n".join(lines)
 
 
 def _check(path: Path, strict: bool) -> None:
@@ -55,8 +137,9 @@ def _check(path: Path, strict: bool) -> None:
 METHOD_NAMES = {
     "raw": "raw grid", "logodds": "log-odds grid", "mean3x3": "3x3 mean", "median3x3": "3x3 median",
     "closing3x3": "3x3 closing", "thesis": "thesis tables", "graphcut": "graph cut",
-    DEFAULT_PRESET: f"{DEFAULT_PRESET} preset", f"{DEFAULT_PRESET}-MAP": f"{DEFAULT_PRESET} preset, MAP",
-    f"{DEFAULT_PRESET}-T": f"{DEFAULT_PRESET} preset, temperature",
+    "certainty": "certainty preset", "certainty-MAP": "certainty preset, MAP",
+    "certainty-T": "certainty preset, temperature", "gated": "gated preset",
+    DEFAULT_PRESET: f"{DEFAULT_PRESET} preset (default)",
     "best-table": "oracle table", "table-from-training": "Intel's table",
     "hilbert": "Bayesian Hilbert map", "octomap": "OctoMap",
     "intel": "Intel", "aces": "ACES", "ros2": "ROS 2 bag", "ros1": "ROS 1 bag", "csail": "MIT CSAIL",
@@ -200,9 +283,14 @@ def _split_size(text: str) -> tuple:
     return (caption, size.strip()) if caption and _SIZE.match(size) else (text, "")
 
 
-def render(template: str, out_dir: Path, missing: list, strict: bool = False) -> str:
-    """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs."""
+def render(template: str, out_dir: Path, missing: list, strict: bool = False, run_seconds=None) -> str:
+    """Fill the placeholders of ``template``; ``strict`` refuses results of quick or non-default runs.
+
+    ``run_seconds``: this run's executed notebooks' summed time, for the speed goals' ``make reproduce`` row
+    when make did not say when it started (:func:`this_run_seconds`).
+    """
     build_facts: dict = {}
+    this_run = this_run_seconds(run_seconds)
 
     def replace(match):
         kind, name, extra = match.group(1), match.group(2).strip(), match.group(3)
@@ -210,7 +298,8 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
             f = paths.GENERATED / f"{name}.json"
             try:
                 table = json.loads(f.read_text())
-                text = missed_goals(table["header"], table["rows"])
+                rows = [this_run_row(row, *this_run) for row in table["rows"]]
+                text = missed_goals(table["header"], rows)
             except (OSError, KeyError, ValueError):
                 missing.append(f"goals of {name}")
                 return f"*(goals of {name} not generated)*"
@@ -235,7 +324,7 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
                 missing.append(f"table {name}")
                 return f"*(table {name} not generated)*"
             _check(f, strict)
-            text = plain_words(provenance.strip(f.read_text()))
+            text = _this_run_table(plain_words(provenance.strip(f.read_text())), *this_run)
             return attach_caption(method_names(text) if name.startswith("beyond") else text)
         if kind == "figure":
             f = paths.FIGURES / f"{name}.png"
@@ -264,17 +353,25 @@ def render(template: str, out_dir: Path, missing: list, strict: bool = False) ->
 
 
 def build_paper(template: Path | None = None, output: Path | None = None, strict: bool = True,
-                publish: bool = True) -> Path:
+                publish: bool = True, run_seconds: float | None = None, word_limit: int | None = WORD_LIMIT) -> Path:
     """Render the template into ``paper/generated/paper.md``; returns its path.
 
-    With ``strict`` a quick or non-default result raises :class:`crfmap.errors.InputError` naming
-    the file, before anything is written. ``publish=True`` also builds ``paper.pdf`` and
-    ``paper.html`` beside it (:mod:`crfstudy.repro.publish`).
+    With ``strict``, before anything is written: a quick or non-default result raises
+    :class:`crfmap.errors.InputError` naming the file; placeholders whose results were not generated raise
+    :class:`ReportIncomplete` naming each; a main text over ``word_limit`` words (:func:`main_text_words`; None:
+    no limit) raises :class:`crfmap.errors.InputError`. Without it (a draft) missing items are marked in the text
+    and listed at its end. ``publish=True`` also builds ``paper.pdf`` and ``paper.html`` beside it
+    (:mod:`crfstudy.repro.publish`).
     """
     template = Path(template or paths.PAPER / "paper.md")
     output = Path(output or paths.GENERATED / "paper.md")
     missing: list = []
-    text = render(template.read_text(), output.parent, missing, strict=strict)
+    text = render(template.read_text(), output.parent, missing, strict=strict, run_seconds=run_seconds)
+    if strict and missing:
+        raise ReportIncomplete(missing)
+    words = main_text_words(text)
+    if strict and word_limit is not None and words > word_limit:
+        raise InputError(template, f"main text (before the appendix) has {words} words, over the limit of {word_limit}")
     if missing:
         text += "\n\n---\nNot generated when this report was built: " + ", ".join(missing) + "\n"
     with atomic_path(output) as tmp:
@@ -296,8 +393,13 @@ def main(argv=None) -> int:
     parser.add_argument("--timings", type=Path, help="also write each notebook's run time here (JSON)")
     parser.add_argument("--executed", type=Path, nargs="*", default=[], help="the executed notebooks")
     args = parser.parse_args(argv)
+    timings = notebook_timings(args.executed)
     try:
-        out = build_paper(args.template, args.output)
+        out = build_paper(args.template, args.output, run_seconds=timings["total_seconds"] or None)
+    except ReportIncomplete as error:
+        for item in error.missing:
+            print(f"paper: refused: not generated: {one_line(item)}", file=sys.stderr)
+        return 2
     except InputError as error:
         print(f"paper: refused: {error}", file=sys.stderr)
         return 2
@@ -307,13 +409,18 @@ def main(argv=None) -> int:
     return 0
 
 
-def write_timings(executed, target) -> dict:
-    """Each executed notebook's run time (papermill's record) as JSON ``{"seconds": {...}, "total_seconds": t}``."""
+def notebook_timings(executed) -> dict:
+    """Each executed notebook's run time (papermill's record): ``{"seconds": {...}, "total_seconds": t}``."""
     seconds = {}
     for notebook in executed:
         meta = json.loads(Path(notebook).read_text()).get("metadata", {}).get("papermill", {})
         seconds[Path(notebook).name] = meta.get("duration")
-    timings = {"seconds": seconds, "total_seconds": sum(v for v in seconds.values() if v)}
+    return {"seconds": seconds, "total_seconds": sum(v for v in seconds.values() if v)}
+
+
+def write_timings(executed, target) -> dict:
+    """Each executed notebook's run time (:func:`notebook_timings`) written to ``target`` as JSON."""
+    timings = notebook_timings(executed)
     with atomic_path(Path(target)) as tmp:
         Path(tmp).write_text(json.dumps(timings, indent=2, sort_keys=True) + "\n")
     return timings

@@ -23,12 +23,12 @@ def _split(seed=0, shape=(24, 24)):
 def test_score_all_calibrates_every_row_of_the_table():
     sp = _split()
     preds = all_baselines(sp, names=["raw", "mean3x3", "thesis", "graphcut"])
-    preds[DEFAULT_PRESET] = get_preset(DEFAULT_PRESET).refine(hits=sp.first_hits, passes=sp.first_passes).beliefs.probability
+    preds.update(peer_report.preset_rows(sp))  # the analysed model and the default preset
     preds["octomap"] = np.clip(sp.raw_probability() * 0.9 + 0.05, 0, 1)  # stands in for a peer's map
     # the log-odds row needs scans: any grid of P stands in for it here
     preds["logodds"] = np.where(sp.first_hits > sp.first_passes, 0.8, np.where(sp.first_passes > 0, 0.2, 0.5))
     result = peer_report.score_all(sp, preds, n_boot=10, block=4, seed=0, temperature=0.8)
-    rows = set(preds) - {"mean3x3"} | {f"{DEFAULT_PRESET}-T"}  # mean3x3 is no table row
+    rows = set(preds) - {"mean3x3"} | {f"{peer_report.ANALYSED}-T"}  # mean3x3 is no table row
     assert set(result["scores"]) == rows and set(result["calibration"]) == rows
     mask, labels = sp.group("all"), sp.labels()[sp.group("all")]
     for name in ("logodds", "thesis", "graphcut", "raw"):
@@ -37,6 +37,31 @@ def test_score_all_calibrates_every_row_of_the_table():
     ece_column = table["header"].index("ECE")
     eces = {row[0]: row[ece_column] for row in table["rows"]}
     assert set(eces) == rows and all(np.isfinite(v) and 0 <= v <= 1 for v in eces.values()), eces
+
+
+def test_the_table_pairs_every_row_with_each_preset_row():
+    sp = _split(seed=3)
+    preds = all_baselines(sp, names=["raw", "thesis"])
+    presets = peer_report.preset_rows(sp)
+    assert set(presets) == {"certainty", DEFAULT_PRESET} and peer_report.ANALYSED == "certainty"
+    for name, p in presets.items():  # each row is the preset as users run it
+        np.testing.assert_array_equal(p, get_preset(name).refine(hits=sp.first_hits, passes=sp.first_passes)
+                                      .beliefs.probability)
+    preds.update(presets)
+    preds["octomap"] = np.clip(sp.raw_probability() * 0.8 + 0.1, 0, 1)
+    result = peer_report.score_all(sp, preds, n_boot=10, block=4, seed=1)
+    assert list(result["versus"]) == list(peer_report.PRESET_ROWS) and result["scores"] is result["versus"]["certainty"]
+    table = peer_report.peer_table("synthetic", result, {})
+    header = table["header"]
+    brier = {row[0]: row[1] for row in table["rows"]}
+    for ref in peer_report.PRESET_ROWS:
+        column = header.index(f"minus {ref}, 95% CI")
+        for row in table["rows"]:
+            diff = float(row[column].split(" ")[0])
+            assert diff == pytest.approx(brier[row[0]] - brier[ref], abs=6e-5), (ref, row[0])
+    sentence = peer_report.peer_sentence("synthetic", result, "octomap", preset=DEFAULT_PRESET)
+    assert sentence.startswith(f"synthetic, octomap vs {DEFAULT_PRESET} (Brier): all observed cells: "
+                               f"{brier['octomap']:.4f} vs {brier[DEFAULT_PRESET]:.4f}")
 
 
 def _room_split(n_scans=16):

@@ -16,8 +16,9 @@ THESIS_NUMBERS = {"0.8", "0.74", "0.004608", "7", "0.26", "0.24", "0.77", "0.505
                   "0.9727", "0.9519", "0.9442", "0.9526", "0.9653", "0.9383", "0.2"}  # Table 14 (= Table 20), sec. 3.4.2
 # ... and the definitions the method is made of: the default tables and their ratios, P = 0.5 unknown,
 # 0.25 / 0.75 for one hit under eq. 16, table entries a of [[a, 1], [1, a]] that the text names, the square
-# lattice's critical coupling 0.44 (a constant of physics) and the 95 % of a confidence interval.
-DEFINITIONS = {"0", "1", "2", "3", "9", "10", "0.9", "0.1", "0.5", "0.25", "0.75", "1.5", "0.44", "95"}
+# lattice's critical coupling 0.44 (a constant of physics), LBP's Bethe point atanh(1/3) = 0.347 on it, and the 95 %
+# of a confidence interval.
+DEFINITIONS = {"0", "1", "2", "3", "9", "10", "0.9", "0.1", "0.5", "0.25", "0.75", "1.5", "0.44", "0.347", "95"}
 # "Fig. 27-35", "Tables 10-14", "eq. 12 and 13", "sec. 3.4.2", "notebook 05": references, not quantities.
 REFERENCE = re.compile(r"\b(?:Figs?\.|Tables?|eqs?\.|sec\.|Listing|notebooks?)\s+\d+(?:\.\d+)*"
                        r"(?:\s*(?:-|,|and)\s*\d+(?:\.\d+)*)*", re.IGNORECASE)
