@@ -12,7 +12,9 @@ of the *training* recording only (Intel):
 3. repeat whole rounds until a round changes nothing (or ``max_rounds``).
 
 Every configuration is scored once (a cache): :attr:`SearchResult.trace` lists them in the order
-they were first scored, :attr:`SearchResult.configurations` counts them.
+they were first scored, :attr:`SearchResult.configurations` counts them. The rule is
+:mod:`crfstudy.analysis.coordinate`'s, the one the peers' search (:mod:`crfstudy.analysis.peer_search`)
+uses too.
 
 The full search on Intel (5 cm cells, even / odd scans) scores about 60 configurations, a minute or
 two of LBP: more than a notebook of ``make reproduce`` should spend. Its result is kept in
@@ -31,12 +33,13 @@ from __future__ import annotations
 
 import json
 import sys
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from crfmap.errors import InputError
+from crfstudy.analysis.coordinate import SearchResult, coordinate_descent  # noqa: F401 - SearchResult: re-exported
 
 # the grid each constant is searched on (a, c: first net hit / pass; b, d: each further one)
 GRID = {
@@ -94,77 +97,22 @@ def search_brier(split, constants: dict, dtype=np.float32, max_iter: int = 5000)
     return score(split, {"p": beliefs}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
 
 
-@dataclass
-class SearchResult:
-    """What :func:`coordinate_search` returns: the best constants, the trace and the grid searched."""
-
-    best: dict
-    best_brier: float
-    trace: list = field(default_factory=list)  # {"round", "coordinate", **constants, "brier"} per new configuration
-    rounds: int = 0
-    converged: bool = False  # True: the last round changed nothing
-    grid: dict = field(default_factory=dict)
-    start: dict = field(default_factory=dict)
-
-    @property
-    def configurations(self) -> int:
-        """How many distinct configurations were scored."""
-        return len(self.trace)
-
-    def as_dict(self) -> dict:
-        return {"best": self.best, "best_brier": self.best_brier, "rounds": self.rounds, "converged": self.converged,
-                "configurations": self.configurations, "grid": {k: list(v) for k, v in self.grid.items()},
-                "start": self.start, "order": list(self.grid), "trace": self.trace}
-
-
 def coordinate_search(split, grid: dict | None = None, start: dict | None = None, max_rounds: int = 10,
                       progress: bool = False, **options) -> SearchResult:
     """Coordinate search of the certainty preset's constants by the scan-split Brier score of ``split``.
 
     ``grid``: {constant: values} (default :data:`GRID`; constants it leaves out stay at ``start``'s
     or the preset's value); ``start``: the first configuration (default :data:`START`), each of its
-    searched values on its grid; ``options`` go to :func:`search_brier`.
+    searched values on its grid; ``options`` go to :func:`search_brier`. The rule is
+    :func:`crfstudy.analysis.coordinate.coordinate_descent`'s, visiting the constants in :data:`ORDER`.
     """
-    from tqdm.auto import tqdm
-
     grid = {k: tuple(v) for k, v in (GRID if grid is None else grid).items()}
-    start = dict(START if start is None else start)
-    for name, values in grid.items():
+    for name in grid:
         if name not in GRID:
             raise InputError("grid", f"unknown constant {name!r}; expected some of {', '.join(GRID)}")
-        if not values:
-            raise InputError("grid", f"{name} has no values to try")
-        if start.get(name) not in values:
-            raise InputError("start", f"{name} = {start.get(name)!r} is not on its grid {list(values)}")
-    if not (isinstance(max_rounds, int) and max_rounds >= 1):
-        raise InputError("max_rounds", f"must be a positive integer, got {max_rounds!r}")
-    scores, trace = {}, []
-    bar = tqdm(desc="preset search", disable=not progress, leave=False)
-
-    def brier(config, round_, coordinate):
-        key = tuple(sorted(config.items()))
-        if key not in scores:
-            scores[key] = search_brier(split, config, **options)
-            trace.append({"round": round_, "coordinate": coordinate, **config, "brier": scores[key]})
-            bar.update()
-        return scores[key]
-
-    current, best = dict(start), brier(start, 0, "start")
-    rounds, converged = 0, False
-    for rounds in range(1, max_rounds + 1):
-        changed = False
-        for name in (k for k in ORDER if k in grid):
-            for value in grid[name]:
-                candidate = dict(current, **{name: value})
-                b = brier(candidate, rounds, name)
-                if b < best:
-                    current, best, changed = candidate, b, True
-        if not changed:
-            converged = True
-            break
-    bar.close()
-    return SearchResult(best=current, best_brier=float(best), trace=trace, rounds=rounds, converged=converged,
-                        grid=grid, start=start)
+    return coordinate_descent(lambda config: search_brier(split, config, **options), grid,
+                              START if start is None else start, order=ORDER, max_rounds=max_rounds,
+                              progress=progress, desc="preset search")
 
 
 def load_cached(path: Path | None = None) -> dict:
