@@ -13,7 +13,8 @@ is the previous batch's posterior (the first prior is N(0, PRIOR_VARIANCE)), and
 - ``xi_n^2 = sum_j phi_nj^2 sig_j + (sum_j phi_nj mu_j)^2``, starting from xi = 1,
 
 exactly as the authors' code (ransalu/Bayesian_Hilbert_Maps, ``BHM2D``: diagonal ``sig``, three
-iterations per batch, no bias feature). The mean update is the full-covariance formula with the
+iterations per batch, no bias feature). This is this project's implementation of that update (sparse
+features, numba), not the authors' program. The mean update is the full-covariance formula with the
 precision's diagonal only (the authors' choice); with a single feature it is exact. A query
 returns the probit-approximated predictive ``sigmoid(a / sqrt(1 + pi s2 / 8))`` with
 ``a = phi . mu``, ``s2 = phi^2 . sig``: far from every feature it is 0.5.
@@ -43,11 +44,12 @@ from crfmap.errors import InputError
 PRIOR_VARIANCE = 10_000.0  # the authors' first prior N(0, 10^4) on every weight
 EM_ITERATIONS = 3  # closed-form rounds per batch (scan), as the authors' code
 CUTOFF = 4.0  # [length scales] features beyond are dropped (exp(-8) = 3e-4 of the peak)
-# Chosen on the Intel log only, by the scan-split Brier score (the search: crfmap.assess.peers.HILBERT_SEARCH_INTEL,
-# saved with notebook 10's results in paper/generated/beyond_peers.json), then fixed for every recording:
+# Chosen on the Intel log only, by the certainty preset's search rule (a coordinate search by the scan-split Brier
+# score; the record: crfmap.assess.peers.HILBERT_SEARCH_INTEL, each value with grid values on either side), then fixed
+# for every recording:
 FEATURE_SPACING = 0.075  # [m] between RBF centres
-LENGTH_SCALE = 0.03  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2) = 556 / m^2
-FREE_SPACING = 0.075  # [m] between free points sampled along a beam
+LENGTH_SCALE = 0.025  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2) = 800 / m^2
+FREE_SPACING = 0.05  # [m] between free points sampled along a beam
 
 
 @njit(cache=True, nogil=True)

@@ -13,8 +13,13 @@ What OctoMap does with one scan (``OccupancyOcTreeBase::insertPointCloud`` with 
    ``l`` is then clamped to ``[logit(clamp_min), logit(clamp_max)]`` (``updateNodeLogOdds``),
    in float32 like OctoMap's nodes. Never-updated cells stay unknown (P = 0.5).
 
+This is this project's implementation of OctoMap's update, not the OctoMap library: it is checked
+against the real library (OctoMap's C++ through octomap-python, a test extra) on the same rays, cell by
+cell, in ``tests/mapping/test_octomap.py::test_matches_the_octomap_library``.
+
 Defaults are OctoMap's (``AbstractOccupancyOcTree``): hit 0.7, miss 0.4, clamping 0.1192 / 0.971
-(log-odds -2 / +3.5). The octree is only OctoMap's storage: at one fixed resolution its
+(log-odds -2 / +3.5). The ``octomap`` peer row (:mod:`crfmap.assess.peers`) uses constants searched
+on the Intel log instead (:data:`crfmap.assess.peers.OCTOMAP_INTEL`). The octree is only OctoMap's storage: at one fixed resolution its
 leaves are this grid's cells. Readings follow REP 117 as in :mod:`crfmap.mapping.builder`
 (no-returns dropped unless ``free_on_no_return``, which clears up to that range like OctoMap's
 ``maxrange``); a beam leaving the grid clears cells up to the edge and marks nothing occupied.

@@ -47,7 +47,8 @@ QUICK = PeerSettings(hilbert_scan_step=4, feature_spacing=0.15, length_scale=0.0
 
 
 def _key(split, name, settings=FULL) -> str:
-    from crfmap.mapping import hilbert, octomap
+    from crfmap.assess.peers import OCTOMAP_INTEL
+    from crfmap.mapping import hilbert
 
     h = hashlib.sha256()
     scans = split.first_scans
@@ -55,7 +56,7 @@ def _key(split, name, settings=FULL) -> str:
         h.update(np.ascontiguousarray(a).tobytes())
     constants = [CACHE_VERSION, name, split.resolution, split.bounds, float(scans.angle_min),
                  float(scans.angle_increment), float(scans.range_min), float(scans.range_max),
-                 octomap.P_HIT, octomap.P_MISS, octomap.CLAMP_MIN, octomap.CLAMP_MAX, hilbert.FEATURE_SPACING,
+                 sorted(OCTOMAP_INTEL.items()), hilbert.FEATURE_SPACING,
                  hilbert.LENGTH_SCALE, hilbert.FREE_SPACING, hilbert.EM_ITERATIONS, hilbert.PRIOR_VARIANCE,
                  hilbert.CUTOFF, asdict(settings)]
     h.update(json.dumps(constants).encode())
