@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from crfmap.assess.peers import OCTOMAP_INTEL, peer_rows
+from crfmap.assess.peers import OCTOMAP_INTEL, PEERS, peer_rows
 from crfmap.assess.scansplit import ScanSplit, scan_split
 from crfmap.errors import InputError
 from crfmap.mapping.hilbert import hilbert_grid
@@ -20,11 +20,14 @@ def _scans(n=6, seed=0):
 def test_rows_are_the_mapping_functions_on_the_first_half():
     sp = scan_split(_scans(), 0.1)
     rows, seconds = peer_rows(sp)
-    assert set(rows) == set(seconds) == {"octomap", "hilbert"} and all(s >= 0 for s in seconds.values())
+    assert set(rows) == set(seconds) == set(PEERS) >= {"octomap", "octomap-defaults", "hilbert"}
+    assert all(s >= 0 for s in seconds.values())
     np.testing.assert_array_equal(rows["octomap"],
                                   octomap_grid(sp.first_scans, 0.1, bounds=sp.bounds, **OCTOMAP_INTEL).probability)
     # the row is not OctoMap's library defaults (the constants searched on Intel differ from them)
-    assert not np.array_equal(rows["octomap"], octomap_grid(sp.first_scans, 0.1, bounds=sp.bounds).probability)
+    defaults = octomap_grid(sp.first_scans, 0.1, bounds=sp.bounds).probability
+    assert not np.array_equal(rows["octomap"], defaults)
+    np.testing.assert_array_equal(rows["octomap-defaults"], defaults)  # the other row: the library's defaults
     np.testing.assert_array_equal(rows["hilbert"], hilbert_grid(sp.first_scans, 0.1, sp.bounds).probability)
     assert all(r.shape == sp.shape for r in rows.values())
 

@@ -20,8 +20,8 @@ from crfmap.errors import InputError
 def method_names(preset: str = DEFAULT_PRESET) -> list:
     """Every row that can be scored, in table order: the baselines, ``preset``, the peers.
 
-    >>> method_names()[:2], method_names()[-2:]
-    (['raw', 'logodds'], ['octomap', 'hilbert'])
+    >>> method_names()[:2], method_names()[-3:]
+    (['raw', 'logodds'], ['octomap', 'octomap-defaults', 'hilbert'])
     """
     if preset not in PRESETS:
         raise InputError("preset", f"must be one of {', '.join(PRESETS)}, got {preset!r}")

@@ -18,13 +18,13 @@ RECORDINGS = {"intel": "carmen/intel-corrected.log.gz", "aces": "carmen/aces-cor
 def bench_peers(quick=False, resolution=0.05):
     """One record per recording present and method: ``seconds`` to map the even scans, grid ``shape``."""
     from crfmap.data import data_file, have_data
-    from crfmap.assess.peers import peer_rows
+    from crfmap.assess.peers import PEERS, peer_rows
     from crfmap.assess.scansplit import scan_split
     from crfmap.crf.presets import DEFAULT_PRESET, get_preset
     from crfmap.io.carmen import read_carmen
 
     names = ["intel"] if quick else list(RECORDINGS)
-    methods = ["octomap"] if quick else ["octomap", "hilbert"]
+    methods = ["octomap"] if quick else list(PEERS)
     out = []
     warmed = False
     for name in names:

@@ -25,7 +25,10 @@ def test_records_per_method_and_skips(tmp_path, monkeypatch):
     monkeypatch.setattr(bench_peers_module, "RECORDINGS", {"room": "carmen/room.log", "gone": "carmen/gone.log"})
     records = bench_peers_module.bench_peers(quick=False, resolution=0.1)
     room = [r for r in records if r["method"] == "peers-room"]
-    assert {r["peer"] for r in room} == {"octomap", "hilbert", "certainty"}
+    from crfmap.assess.peers import PEERS
+    from crfmap.crf.presets import DEFAULT_PRESET
+
+    assert {r["peer"] for r in room} == set(PEERS) | {DEFAULT_PRESET}
     assert all(r["seconds"] >= 0 and r["scans"] == 4 for r in room)
     gone = [r for r in records if r["method"] == "peers-gone"]
     assert len(gone) == 1 and "not found" in gone[0]["note"]
