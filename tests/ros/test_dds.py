@@ -9,6 +9,7 @@ import pytest
 from crfmap.data import data_file, have_data
 from crfmap.cli import main as crfmap_main
 from crfmap.io.grid_files import load_grid
+from crfmap.io.nav2_values import nav2_values
 from crfmap.io.npy_grid import save_npy
 from crfmap.ros.messages import GridMessage, grid_message, grid_out, occupancy_grid
 
@@ -29,13 +30,13 @@ def _intel_grid():
 
 
 def _expected(source, tmp_path, name, *options):
-    """`crfmap infer` of a grid (an OccupancyGrid, or a map file), as 0..100 / -1 values."""
+    """`crfmap infer` of a grid (an OccupancyGrid, or a map file), as the node publishes it: nav2's 100 / 0 / -1."""
     out = tmp_path / f"{name}_out.npy"
     if not isinstance(source, str):
         save_npy(source, tmp_path / f"{name}_in.npy")
         source = tmp_path / f"{name}_in.npy"
     assert crfmap_main(["infer", str(source), str(out), *options]) == 0
-    return load_grid(out).to_int8().reshape(-1)
+    return nav2_values(load_grid(out)).reshape(-1)
 
 
 def _writer_reader(participant, kind_in="grid"):
@@ -306,7 +307,7 @@ def test_map_node_over_dds_equals_online_mapper_on_the_scans_it_integrated(tmp_p
                                      scans.range_min, scans.range_max, radius=4.0, margin=3)
     for i in which:
         mapper.integrate(scans.ranges[i], scans.laser_poses[i])
-    expected = mapper.beliefs().to_int8().reshape(-1)
+    expected = nav2_values(mapper.beliefs()).reshape(-1)
     assert (got.width, got.height, got.frame_id) == (mapper.width, mapper.height, "odom")
     assert np.array_equal(got.data, expected), f"{int(np.sum(got.data != expected))} cells differ"
     # every scan is accounted for, lost ones visibly

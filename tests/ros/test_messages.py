@@ -20,7 +20,8 @@ def test_grid_values_become_probabilities_and_back():
     grid = occupancy_grid(_grid())
     assert grid.resolution == 0.05 and grid.origin == (1.0, 2.0, 0.0)
     assert grid.probability[0].tolist() == [0.5, 0.0, 1.0]
-    assert grid_out(grid, 7, "map").data.tolist() == [-1, 0, 100, 50, 20, -1]  # a known 50 stays 50
+    assert grid_out(grid, 7, "map", "percent").data.tolist() == [-1, 0, 100, 50, 20, -1]  # a known 50 stays 50
+    assert grid_out(grid, 7, "map").data.tolist() == [-1, 0, 100, -1, 0, -1]  # as nav2 reads the written map
 
 
 @pytest.mark.parametrize("change, kind", [

@@ -2,8 +2,11 @@
 import numpy as np
 import pytest
 
+from crfmap.errors import InputError
+
 from crfmap.ros.node import MapNode, RefineNode, refine_grid
 from crfmap.ros.messages import GridMessage
+from crfmap.io.nav2_values import nav2_values
 
 
 def _native(stamp, width=2, data=(0, 100)):
@@ -126,7 +129,7 @@ def test_map_node_accounts_for_every_scan_and_logs_the_integrated_ones(tmp_path)
     mapper = OnlineMapper.for_sensor((-5, -5, 5, 5), 0.1, -0.5, 0.5, 3, 0.1, 5.0, margin=3)
     for pose in poses:
         mapper.integrate(np.array([1.0, 2.0, 1.0], np.float32), pose)
-    assert np.array_equal(sent[-1].data, mapper.beliefs().to_int8().reshape(-1))
+    assert np.array_equal(sent[-1].data, nav2_values(mapper.beliefs()).reshape(-1))
 
 
 def _room_recording(n=10, beams=91, seed=3):
@@ -215,7 +218,20 @@ def test_map_node_final_map_is_the_presets_offline_refinement(tmp_path, preset):
     assert offline.converged
     np.testing.assert_allclose(node.mapper.beliefs().probability, offline.beliefs.probability, atol=2e-3)
     published = final.data.reshape(final.height, final.width).astype(int)
-    assert np.abs(published - offline.beliefs.to_int8().astype(int)).max() <= 1
-    # the unexplored outside stays unknown, walls stay walls
-    assert np.array_equal(published == -1, offline.beliefs.to_int8() == -1) and (published == -1).any()
-    assert (published >= 65).sum() >= 0.9 * (offline.beliefs.probability >= 0.65).sum() > 0
+    expected = nav2_values(offline.beliefs).astype(int)  # what nav2 reads: 100 / 0 / -1
+    assert set(np.unique(published)) <= {-1, 0, 100}
+    assert np.mean(published != expected) < 1e-3  # only cells within 2e-3 of a threshold may differ
+    assert (published == -1).any() and (published == 100).sum() >= 0.9 * (expected == 100).sum() > 0
+
+
+def test_the_node_publishes_what_nav2_reads_or_percent_when_asked():
+    """trinary (default): 100 / 0 / -1 as map_server publishes crfmap infer's file (nav2's costmap makes every value
+    below 100 free: a wall at P = 0.9 published as 90 would be driven through); percent: P x 100."""
+    from crfmap.grid import OccupancyGrid
+    from crfmap.ros.messages import grid_out
+
+    grid = OccupancyGrid(np.array([[0.9, 0.3, 0.1, 0.5]]))
+    assert grid_out(grid, 1, "map").data.tolist() == [100, -1, 0, -1]
+    assert grid_out(grid, 1, "map", "percent").data.tolist() == [90, 30, 10, -1]
+    with pytest.raises(InputError, match="values"):
+        RefineNode(values="scale")

@@ -5,7 +5,7 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 - :mod:`crfmap.assess.metrics`: ``evaluate``, ``Report``, ``mse``, ``confusion``, ``roc_curve``, ``auc``
 - :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score`` (validation on scans the map never saw)
 - :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
-- :mod:`crfmap.assess.navigation`: ``nav_scores``, ``nav2_values``, ``nav2_classes``, ``wall_shape`` (the map as nav2 reads the written trinary file, scored on a scan split)
+- :mod:`crfmap.assess.navigation`: ``nav_scores``, ``nav2_classes``, ``wall_shape`` (the map as nav2 reads the written trinary file, scored on a scan split)
 - :mod:`crfmap.assess.localisation`: ``localise``, ``compare_localisation`` (maps scored by nav2_amcl's likelihood field on held-out scans)
 - :mod:`crfmap.assess.likelihood_field`: ``LaserModel``, ``LikelihoodField`` (nav2_amcl's laser model, as nav2 computes it)
 - :mod:`crfmap.assess.comparison`: ``compare``, ``method_names`` (every evaluated row of a scan split)
@@ -42,7 +42,6 @@ _API = {
     "grey_closing": "baselines",
     "graph_cut": "baselines",
     "nav_scores": "navigation",
-    "nav2_values": "navigation",
     "nav2_classes": "navigation",
     "wall_shape": "navigation",
     "localise": "localisation",

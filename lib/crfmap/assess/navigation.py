@@ -49,7 +49,6 @@ lethal components per 10 m of skeleton: fewer is more continuous).
 """
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -58,11 +57,9 @@ from scipy import ndimage
 from crfmap.assess.scansplit import (DEFAULT_BLOCK, GROUPS, LOG_FLOOR, ScanSplit, block_resamples, check_probability,
                                      percentile_interval, score)
 from crfmap.errors import InputError
-from crfmap.grid import UNKNOWN
-from crfmap.io.map_server import FREE_THRESH_DEFAULT, OCCUPIED_THRESH_DEFAULT
-from crfmap.io.map_server import pixels_from_occupancy  # map_saver's per-cell pixel rule (one rule, not a copy)
 from crfmap.io.nav2_costmap import LETHAL_OBSTACLE, NO_INFORMATION, static_layer_costs
-from crfmap.io.nav2_loader import DEFAULT_LOADER, LOADERS, Pixels, occupancy
+from crfmap.io.nav2_loader import DEFAULT_LOADER
+from crfmap.io.nav2_values import nav2_values
 
 COVER_RADIUS = 0.5  # [m] a dangerous miss farther than this from every lethal cell is a hole inflation leaves open
 GHOST_PASSES = 2  # a held-out free cell passed at least this often and never hit: a lethal call there is a ghost
@@ -77,35 +74,6 @@ COUNTS = ("occupied", "lethal", "lethal_hits", "misses", "far_misses", "unknown_
           "free")
 MAP_METRICS = ("unknown_free", "unknown_free_observed", "unknown_free_occupied", "lethal_cells", "skeleton_m",
                "thickness", "components", "components_per_10m")
-
-
-@functools.lru_cache(maxsize=len(LOADERS))
-def _value_table(loader: str) -> np.ndarray:
-    """nav2's OccupancyGrid value of each written value -1..100 (index v + 1): map_saver's trinary pixel, loaded."""
-    written = np.arange(-1, 101, dtype=np.int16).reshape(1, -1)
-    grey, _ = pixels_from_occupancy(written, "trinary", OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT)
-    loaded = occupancy(Pixels.from_grey8(grey), "trinary", 0, OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT,
-                       loader=loader)
-    return loaded[0]
-
-
-def nav2_values(probability, loader: str = DEFAULT_LOADER) -> np.ndarray:
-    """int8 [y, x]: what nav2's map_server publishes from the trinary map of P that ``crfmap infer`` writes.
-
-    100 lethal, 0 free, -1 unknown (see the module doc; ``loader``: ``"jazzy"`` or ``"humble"``).
-
-    >>> nav2_values(np.array([[0.645, 0.6451, 0.205, 0.2051, 0.5]])).tolist()
-    [[-1, 100, 0, -1, -1]]
-    """
-    if loader not in LOADERS:
-        raise InputError("loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
-    p = np.asarray(getattr(probability, "probability", probability), dtype=np.float64)  # an OccupancyGrid's P
-    if p.ndim != 2:
-        raise InputError("probability", f"expected a 2-D [y, x] array, got shape {p.shape}")
-    p = check_probability(p, p.shape, "probability")
-    written = np.rint(p * 100.0).astype(np.int16)  # OccupancyGrid.to_int8: the percent the file holds
-    written[p == UNKNOWN] = -1
-    return _value_table(loader)[written + 1]
 
 
 def nav2_classes(probability, loader: str = DEFAULT_LOADER) -> tuple:
@@ -303,5 +271,5 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
     return out
 
 
-__all__ = ["COVER_RADIUS", "GHOST_PASSES", "NAV_METRICS", "MAP_METRICS", "nav2_values", "nav2_classes",
+__all__ = ["COVER_RADIUS", "GHOST_PASSES", "NAV_METRICS", "MAP_METRICS", "nav2_classes",
            "skeleton_length", "wall_shape", "cell_counts", "nav_scores"]

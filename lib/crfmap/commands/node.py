@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import argparse
 
+from crfmap.io.nav2_values import VALUE_MODES
+
 from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
 from crfmap.errors import InputError
 
@@ -63,6 +65,10 @@ def add_parser(sub):
                           help="DDS domain (default: $ROS_DOMAIN_ID, else 0; dds backend)")
         mode.add_argument("--period", type=float, default=1.0, metavar="S",
                           help="publish at most once per S seconds (default 1)")
+        mode.add_argument("--values", choices=VALUE_MODES, default="trinary",
+                          help="what the published OccupancyGrid holds: trinary (default: 100 lethal, 0 free, -1 "
+                          "unknown, as map_server publishes the map crfmap infer writes; nav2's costmap reads every "
+                          "value below 100 as free) or percent (P x 100, for tools that read probabilities)")
     return p
 
 
@@ -101,13 +107,13 @@ def make_node(args):
     from crfmap.ros.node import MapNode, RefineNode
 
     if args.mode == "refine":
-        return RefineNode(args.input, args.output, period=args.period)
+        return RefineNode(args.input, args.output, period=args.period, values=args.values)
     options = {"preset": args.preset, "radius": args.radius}
     if args.margin is not None:  # else the preset's own
         options["margin"] = None if args.margin == -1 else args.margin
     return MapNode(args.bounds, args.resolution, scan_topic=args.scan, map_topic=args.map,
                    metadata_topic=args.metadata, fixed_frame=args.fixed_frame, period=args.period,
-                   mapper_options=options, scan_log=args.scan_log)
+                   mapper_options=options, scan_log=args.scan_log, values=args.values)
 
 
 def run(args: argparse.Namespace) -> int:

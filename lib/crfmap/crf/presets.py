@@ -282,14 +282,14 @@ class Preset:
         result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
         if own is not None:  # outside the preset's region nothing was inferred: keep the observation
             np.copyto(result.beliefs.probability, unary, where=~own)  # the result's own array: checked, in [0, 1]
-        if self.gate is not None:  # after LBP and the margin: the gate reads each cell's own evidence
+        # after LBP and the margin: the gate reads each cell's own evidence, everywhere (a never-observed cell beyond the
+        # margin too gets the building's rate: still unknown to nav2, and a calibrated probability in a .npy)
+        if self.gate is not None:
             if hits is not None:
                 gated = self.gate.apply(result.beliefs.probability, hits=hits, passes=passes)
             else:
                 gated = self.gate.apply(result.beliefs.probability, evidence=evidence_from_probability(g.probability),
                                         observed=observed)
-            if own is not None:  # outside the preset's region nothing was inferred: the observation (unknown) stays
-                gated = np.where(own, gated, result.beliefs.probability)
             result.beliefs = result.beliefs.with_probability(gated.astype(result.beliefs.probability.dtype))
         if self.temperature != 1.0:  # the whole output, observation-only cells too
             probability = temper(result.beliefs.probability, self.temperature)

@@ -260,7 +260,7 @@ class OnlineMapper:
             probability[~region] = 0.5
         if self.preset.gate is not None:
             gated = self.preset.gate.apply(probability, hits=self.hits.occupied, passes=self.hits.empty)
-            probability = gated if region is None else np.where(region, gated, probability)
+            probability = gated  # everywhere, as Preset.refine
         if self.preset.temperature != 1.0:
             probability = temper(probability, self.preset.temperature)
         return self._grid(probability, model="crf-online", preset=self.preset.name)

@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from crfmap.io.nav2_values import occupancy_values
 from crfmap.errors import InputError
 from crfmap.frames import quaternion_to_yaw, yaw_to_quaternion
 
@@ -194,13 +195,15 @@ def occupancy_grid(msg: GridMessage):
         raise BadMessage("geometry", exc.problem) from None
 
 
-def grid_out(grid, stamp_ns_, frame_id) -> GridMessage:
-    """A :class:`GridMessage` of an :class:`~crfmap.grid.OccupancyGrid` (P -> 0..100, exactly 0.5 -> -1)."""
+def grid_out(grid, stamp_ns_, frame_id, values="trinary") -> GridMessage:
+    """A :class:`GridMessage` of an :class:`~crfmap.grid.OccupancyGrid`: ``values`` "trinary" (100 / 0 / -1 as nav2's
+    map_server publishes the trinary file crfmap infer writes) or "percent" (P -> 0..100, exactly 0.5 -> -1)."""
     x, y, yaw = grid.origin
     qx, qy, qz, qw = yaw_to_quaternion(yaw)
     return GridMessage(stamp_ns=int(stamp_ns_), frame_id=frame_id, map_load_ns=int(stamp_ns_),
                        resolution=float(grid.resolution), width=grid.width, height=grid.height,
-                       origin=(float(x), float(y), 0.0, qx, qy, qz, qw), data=grid.to_int8().reshape(-1))
+                       origin=(float(x), float(y), 0.0, qx, qy, qz, qw),
+                       data=occupancy_values(grid, values).reshape(-1))
 
 
 def check_scan(msg: ScanMessage) -> None:

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 from crfmap.errors import InputError
 from crfmap.ros import qos
+from crfmap.io.nav2_values import VALUE_MODES, occupancy_values
 from crfmap.ros.messages import (BadMessage, check_scan, grid_message, grid_out, occupancy_grid, same_geometry,
                                  scan_message, transforms_of)
 from crfmap.ros.tf_buffer import TfBuffer, stamp_seconds
@@ -85,11 +86,20 @@ class Subscription:
     handler: object
 
 
+def check_values(values: str) -> str:
+    """The published values' mode, checked (one of :data:`crfmap.io.nav2_values.VALUE_MODES`)."""
+    if values not in VALUE_MODES:
+        raise InputError("values", f"must be one of {', '.join(VALUE_MODES)}, got {values!r}")
+    return values
+
+
 class RefineNode:
     """Refine each new map of ``input_topic`` and publish it on ``output_topic`` (see the module docstring)."""
 
-    def __init__(self, input_topic="/map", output_topic="/map_refined", period=1.0, refine=refine_grid, log=log_line):
+    def __init__(self, input_topic="/map", output_topic="/map_refined", period=1.0, refine=refine_grid, log=log_line,
+                 values="trinary"):
         self.input_topic, self.output_topic = input_topic, output_topic
+        self.values = check_values(values)  # trinary: what nav2's costmap reads right (see crfmap.io.nav2_values)
         self.period = float(period)
         self.refine = refine
         self.log = log
@@ -121,7 +131,7 @@ class RefineNode:
             return 0.0
         t0 = time.perf_counter()
         refined = self.refine(grid)
-        self.publishers["output"](msg.with_data(refined.to_int8()))
+        self.publishers["output"](msg.with_data(occupancy_values(refined, self.values)))
         self.published += 1
         self.last_publish = time.monotonic()
         self.log(f"refined {self.input_topic} ({msg.width} x {msg.height} cells, stamp {stamp_seconds(msg.stamp_ns):.3f} s) "
@@ -145,8 +155,10 @@ class MapNode:
     """
 
     def __init__(self, bounds, resolution=0.05, scan_topic="/scan", map_topic="/map", metadata_topic="/map_metadata",
-                 fixed_frame=None, period=1.0, mapper_options=None, log=log_line, max_waiting=1000, scan_log=None):
+                 fixed_frame=None, period=1.0, mapper_options=None, log=log_line, max_waiting=1000, scan_log=None,
+                 values="trinary"):
         self.bounds = tuple(float(v) for v in bounds)
+        self.values = check_values(values)
         self.resolution = float(resolution)
         self.scan_topic, self.map_topic, self.metadata_topic = scan_topic, map_topic, metadata_topic
         self.fixed_frame = fixed_frame
@@ -244,7 +256,7 @@ class MapNode:
         """Integrate the scans tf now covers (for a slice of time), publish if due; seconds until the next call."""
         self._integrate_ready(time.perf_counter() + SLICE_SECONDS)
         if self.integrated > self.published_scans and now >= self.last_publish + self.period:
-            out = grid_out(self.mapper.beliefs(), self.last_stamp_ns, self.fixed_frame)
+            out = grid_out(self.mapper.beliefs(), self.last_stamp_ns, self.fixed_frame, self.values)
             self.publishers["map"](out)
             self.publishers["metadata"](out)
             self.published_scans = self.integrated
@@ -264,7 +276,7 @@ class MapNode:
         if self.mapper is None:
             return
         result = self.mapper.finish()
-        out = grid_out(result.beliefs, self.last_stamp_ns, self.fixed_frame)
+        out = grid_out(result.beliefs, self.last_stamp_ns, self.fixed_frame, self.values)
         self.publishers["map"](out)
         self.publishers["metadata"](out)
         self.log(f"final map ({self.mapper.preset.name} preset, {self.integrated} scans): whole-grid LBP "
