@@ -100,7 +100,7 @@ def shift_zero_start(rec, source):
 
 def run(args: argparse.Namespace) -> int:
     from crfmap.io.bag_writer import write_bag
-    from crfmap.commands.build import load_recording
+    from crfmap.io.recordings import load_recording
 
     out = Path(args.output)
     fmt = args.format or ("ros1" if out.suffix == ".bag" else "ros2")

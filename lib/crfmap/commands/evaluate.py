@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from crfmap.assess.calibration import split_calibration
     from crfmap.assess.comparison import compare, parse_methods, table_rows
     from crfmap.assess.scansplit import scan_split
-    from crfmap.commands.build import load_recording
+    from crfmap.io.recordings import load_recording
     from tabulate import tabulate
 
     if args.boot < 0:

@@ -174,7 +174,7 @@ def load_cached(peer: str, path: Path | None = None) -> dict:
 def training_split():
     """Intel's scan split at 5 cm (even scans map, odd scans score): the preset's training split."""
     from crfmap.assess.scansplit import scan_split
-    from crfmap.commands.build import load_recording
+    from crfmap.io.recordings import load_recording
     from crfmap.data import data_file
 
     return scan_split(load_recording(data_file(TRAINING)).scans, TRAINING_RESOLUTION)

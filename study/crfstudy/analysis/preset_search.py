@@ -127,7 +127,7 @@ def load_cached(path: Path | None = None) -> dict:
 def run_training_search(progress: bool = True) -> dict:
     """The full search on the training recording (Intel, even / odd scans at 5 cm), as the cache holds it."""
     from crfmap.assess.scansplit import scan_split
-    from crfmap.commands.build import load_recording
+    from crfmap.io.recordings import load_recording
     from crfmap.data import data_file
 
     recording = load_recording(data_file(TRAINING))

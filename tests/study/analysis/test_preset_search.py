@@ -74,7 +74,7 @@ def test_preset_constants_are_what_the_search_returns():
 @pytest.mark.skipif(not have_data(ps.TRAINING), reason="Intel log not downloaded")
 def test_cached_scores_are_reproduced_on_intel():
     from crfmap.assess.scansplit import scan_split
-    from crfmap.commands.build import load_recording
+    from crfmap.io.recordings import load_recording
 
     cached = ps.load_cached()
     sp = scan_split(load_recording(data_file(ps.TRAINING)).scans, ps.TRAINING_RESOLUTION)
