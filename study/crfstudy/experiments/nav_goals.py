@@ -119,26 +119,34 @@ def _pair(ci):
 
 
 def harder_scores(scans, settings: GoalSettings, calibrators: dict) -> dict:
-    """{split name: Brier of raw / default / calibrated models, and the default minus the best calibrated model}."""
-    from crfmap.assess.scansplit import score
+    """{split name: {"brier": {row: Brier, all cells}, "opponent", "diff", "ci", "groups", "cells"}} on the harder splits.
+
+    Rows: raw, the old default, the default and the calibrated models; ``opponent`` is the calibrated model with the
+    lower Brier on all cells there, ``diff`` / ``ci`` the default minus it (paired interval), ``groups`` the same
+    for the cells the map had seen and those it had not: {group: {"diff", "ci"}}.
+    """
+    from crfmap.assess.scansplit import GROUPS, score
     from crfmap.assess.splits import harder_splits
     from crfmap.crf.presets import get_preset
 
     out = {}
     for kind, sp in harder_splits(scans, settings.resolution, block=settings.split_block,
                                   tile=settings.split_tile).items():
-        preds = {"raw": sp.raw_probability(),
-                 DEFAULT_PRESET: get_preset(DEFAULT_PRESET).refine(hits=sp.first_hits,
-                                                                   passes=sp.first_passes).beliefs.probability}
+        preds = {"raw": sp.raw_probability()}
+        preds.update({name: get_preset(name).refine(hits=sp.first_hits, passes=sp.first_passes).beliefs.probability
+                      for name in (OLD_DEFAULT, DEFAULT_PRESET)})
         preds.update({name: _calibrated(model, sp) for name, model in calibrators.items()})
         s = score(sp, preds, n_boot=settings.n_boot, block=settings.block, seed=settings.seed,
-                  reference=DEFAULT_PRESET, metrics=("brier",), groups=("all",))
+                  reference=DEFAULT_PRESET, metrics=("brier",))
         brier = {name: s[name]["all"]["brier"] for name in preds}
         opponent = min(calibrators, key=brier.get)  # the stronger independent-cell model on this split
-        entry = s[opponent]["all"]  # opponent minus default: flip it to default minus opponent
-        ci = entry.get("brier_diff_ci")
-        out[kind] = {"brier": brier, "opponent": opponent, "diff": -entry["brier_diff"], "cells": entry["cells"],
-                     "ci": None if ci is None else [-ci[1], -ci[0]]}
+        groups = {}
+        for group in GROUPS:
+            entry = s[opponent][group]  # opponent minus default: flipped to default minus opponent
+            ci = entry.get("brier_diff_ci")
+            groups[group] = {"diff": -entry["brier_diff"], "ci": None if ci is None else [-ci[1], -ci[0]],
+                             "cells": entry["cells"]}
+        out[kind] = {"brier": brier, "opponent": opponent, **groups["all"], "groups": groups}
     return out
 
 
@@ -276,7 +284,11 @@ def recording_goals(summary: dict) -> list:
     parts, wins = [], []
     for kind, h in harder.items():
         wins.append(better(h["diff"], h["ci"]))
-        parts.append(f"{kind}: minus {h['opponent']} {_diff_text(h['diff'], h['ci'])}")
+        by_group = h.get("groups", {})
+        seen = "; ".join(f"{g} {_fmt(by_group[g]['diff'])}" for g in ("seen", "unseen") if g in by_group)
+        parts.append(f"{kind}: minus {h['opponent']} {_diff_text(h['diff'], h['ci'])}" + (f" ({seen})" if seen else "")
+                     + (f", {OLD_DEFAULT} {_fmt(h['brier'][OLD_DEFAULT] - h['brier'][h['opponent']])}"
+                        if OLD_DEFAULT in h.get("brier", {}) else ""))
     met = None if not wins or None in wins else all(wins)
     out.append(Verdict("1c", "Brier better than the calibrated independent-cell model on the harder splits", met,
                        f"won {sum(bool(w) for w in wins)} of {len(wins)}; " + "; ".join(parts)))
