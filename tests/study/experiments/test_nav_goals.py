@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from crfmap.crf.presets import DEFAULT_PRESET as D
+from crfmap.errors import InputError
+from crfstudy.experiments import goal_rules as gr
 from crfstudy.experiments import nav_goals as ng
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -16,11 +18,11 @@ NOTEBOOK = ROOT / "notebooks" / "12_navigation_goals.ipynb"
 
 
 def _status(summary, goal):
-    return {v.goal: v.status for v in ng.recording_goals(summary)}[goal]
+    return {v.goal: v.status for v in gr.recording_goals(summary)}[goal]
 
 
 def test_the_example_summary_gives_the_verdicts_worked_out_by_hand():
-    got = {v.goal: v.status for v in ng.recording_goals(ng.example_summary())}
+    got = {v.goal: v.status for v in gr.recording_goals(gr.example_summary())}
     assert got == {"1a": "met*", "1b": "met", "1c": "missed", "2a": "met", "2b": "met", "3": "met", "4a": "met",
                    "4b": "met", "5a": "met", "5b": "met", "6": "met*", "8a": "missed", "8b": "met", "8c": "met",
                    "8d": "met*"}
@@ -36,7 +38,7 @@ def test_the_example_summary_gives_the_verdicts_worked_out_by_hand():
     (float("nan"), (0.0, 0.1), True, (None, False)),
 ])
 def test_no_worse_at_its_edges(diff, ci, lower, expected):
-    assert ng.no_worse(diff, ci, lower_is_better=lower) == expected
+    assert gr.no_worse(diff, ci, lower_is_better=lower) == expected
 
 
 @pytest.mark.parametrize("diff, ci, lower, expected", [
@@ -49,11 +51,11 @@ def test_no_worse_at_its_edges(diff, ci, lower, expected):
     (float("nan"), None, True, None),
 ])
 def test_better_at_its_edges(diff, ci, lower, expected):
-    assert ng.better(diff, ci, lower_is_better=lower) is expected
+    assert gr.better(diff, ci, lower_is_better=lower) is expected
 
 
 def _with(path, value):
-    s = copy.deepcopy(ng.example_summary())
+    s = copy.deepcopy(gr.example_summary())
     target = s
     for key in path[:-1]:
         target = target[key]
@@ -109,27 +111,27 @@ def _records(scans_crf, walls_crf=(1, 1, 1)):
 
 
 def test_closed_loop_goal_7_on_hand_made_records():
-    v = {x.goal: x for x in ng.closed_loop_goals(_records((50, 50, 50)), n_boot=200)}
+    v = {x.goal: x for x in gr.closed_loop_goals(_records((50, 50, 50)), n_boot=200)}
     assert [v[g].status for g in ("7a", "7b")] == ["met", "met"]
     assert v["7c"].status == "missed"  # 1 plan into a wall against octomap's 0 in every scene: the interval is 1, 1
-    v = {x.goal: x for x in ng.closed_loop_goals(_records((51, 51, 51), (0, 0, 0)), n_boot=200)}
+    v = {x.goal: x for x in gr.closed_loop_goals(_records((51, 51, 51), (0, 0, 0)), n_boot=200)}
     assert v["7a"].status == "missed" and "+1.00 [+1.00, +1.00]" in v["7a"].evidence
     assert v["7c"].status == "met"
-    v = {x.goal: x for x in ng.closed_loop_goals(_records((40, 60, 50), (0, 0, 0)), n_boot=200)}
+    v = {x.goal: x for x in gr.closed_loop_goals(_records((40, 60, 50), (0, 0, 0)), n_boot=200)}
     assert v["7a"].status == "met"  # against raw: +0 on average, the interval spans 0
-    with pytest.raises(ng.InputError, match="octomap"):
-        ng.closed_loop_goals([r for r in _records((50, 50, 50)) if r["kind"] != "octomap"])
+    with pytest.raises(InputError, match="octomap"):
+        gr.closed_loop_goals([r for r in _records((50, 50, 50)) if r["kind"] != "octomap"])
 
 
 def test_the_matrix_names_what_was_missed_and_marks_interval_only_goals():
-    columns = {"x": ng.recording_goals(ng.example_summary()), "loop": ng.closed_loop_goals(_records((50, 50, 50)))}
-    header, rows = ng.goal_matrix(columns)
+    columns = {"x": gr.recording_goals(gr.example_summary()), "loop": gr.closed_loop_goals(_records((50, 50, 50)))}
+    header, rows = gr.goal_matrix(columns)
     by_goal = {row[0].split()[0]: row[1:] for row in rows}
     assert header == ["goal", "x", "loop"] and len(rows) == 8
     assert by_goal["1"] == ["missed: 1c", "n/a"] and by_goal["6"] == ["met*", "n/a"]
     assert by_goal["5"] == ["met", "n/a"] and by_goal["7"] == ["n/a", "missed: 7c"]
     assert by_goal["8"] == ["missed: 8a", "n/a"]
-    _, details = ng.goal_details(columns)
+    _, details = gr.goal_details(columns)
     assert len(details) == 15 + 3 and details[0][:4] == ["x", "1a", details[0][2], "met*"]
 
 
@@ -174,9 +176,9 @@ def test_a_tiny_run_end_to_end_agrees_with_the_library(tmp_path):
     scans = read_carmen(log).scans
     split = scan_split(scans, TINY.resolution)
     maps = {name: get_preset(name).refine(hits=split.first_hits, passes=split.first_passes).beliefs.probability
-            for name in (D, ng.OLD_DEFAULT)}
+            for name in (D, gr.OLD_DEFAULT)}
     brier = score(split, maps, n_boot=0, groups=("all",), metrics=("brier",))
-    assert s["brier_vs_certainty"]["diff"] == pytest.approx(brier[D]["all"]["brier"] - brier[ng.OLD_DEFAULT]["all"]["brier"])
+    assert s["brier_vs_certainty"]["diff"] == pytest.approx(brier[D]["all"]["brier"] - brier[gr.OLD_DEFAULT]["all"]["brier"])
     lo, hi = s["brier_vs_certainty"]["ci"]
     assert lo <= hi
     for name, p in (("raw", split.raw_probability()), (D, maps[D])):
@@ -192,7 +194,7 @@ def test_a_tiny_run_end_to_end_agrees_with_the_library(tmp_path):
     b = score(temporal, {"d": mine, "o": theirs}, n_boot=0, groups=("all",), metrics=("brier",))
     assert h["diff"] == pytest.approx(b["d"]["all"]["brier"] - b["o"]["all"]["brier"])
     assert h["brier"][h["opponent"]] == min(h["brier"][c] for c in ng.CALIBRATED)
-    assert set(s["localisation"]) == {"raw", D, ng.OLD_DEFAULT, "octomap"}
+    assert set(s["localisation"]) == {"raw", D, gr.OLD_DEFAULT, "octomap"}
 
 
 def test_the_command_refuses_an_unknown_recording_in_one_line(capsys):
