@@ -106,7 +106,8 @@ def _nav_verdict(goal, what, nav, group, metric, rule, lower_is_better, digits=4
     evidence = (f"{metric} {d[metric]:.{digits}f} vs raw {r[metric]:.{digits}f}; diff {_diff_text(diff, ci, digits)}"
                 if _finite(d[metric], r[metric]) else f"{metric}: nothing to score ({d[metric]} vs {r[metric]})")
     if metric == "miss_rate" and "far_miss_rate" in d:  # the holes the costmap's inflation leaves open (information)
-        evidence += f"; beyond 0.5 m of every lethal cell {d['far_miss_rate']:.{digits}f} vs raw {r['far_miss_rate']:.{digits}f}"
+        evidence += (f"; of them beyond 0.5 m of every lethal cell {d['far_miss_rate']:.{digits}f} vs raw "
+                     f"{r['far_miss_rate']:.{digits}f}, diff {_diff_text(d.get('far_miss_rate_diff'), d.get('far_miss_rate_diff_ci'), digits)}")
     return Verdict(goal, what, met, evidence, only)
 
 
