@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from crfmap.assess.peers import PEERS
 from crfmap.crf.presets import DEFAULT_PRESET as D
 from crfmap.errors import InputError
 from crfstudy.experiments import goal_rules as gr
@@ -194,7 +195,7 @@ def test_a_tiny_run_end_to_end_agrees_with_the_library(tmp_path):
     b = score(temporal, {"d": mine, "o": theirs}, n_boot=0, groups=("all",), metrics=("brier",))
     assert h["diff"] == pytest.approx(b["d"]["all"]["brier"] - b["o"]["all"]["brier"])
     assert h["brier"][h["opponent"]] == min(h["brier"][c] for c in ng.CALIBRATED)
-    assert set(s["localisation"]) == {"raw", D, gr.OLD_DEFAULT, "octomap"}
+    assert set(s["localisation"]) == {"raw", D, gr.OLD_DEFAULT} and set(s["nav"]) == {"raw", D, gr.OLD_DEFAULT, "octomap"}
 
 
 def test_the_command_refuses_an_unknown_recording_in_one_line(capsys):
@@ -216,7 +217,7 @@ def test_the_notebook_reads_the_registry_s_recordings_and_the_command_s_settings
     p = _parameters()
     assert p["quick"] is False
     full = ng.GoalSettings(resolution=p["resolution"], n_boot=p["n_boot"], block=p["block"], seed=p["seed"],
-                           peers=("octomap", "hilbert") if p["hilbert"] else ("octomap",),
+                           peers=tuple(x for x in PEERS if p["hilbert"] or x != "hilbert"),
                            split_block=p["split_block"], split_tile=p["split_tile"], loc_scans=p["loc_scans"],
                            n_floors=p["n_floors"], floor_size=(p["floor_width"], p["floor_height"]),
                            max_scans=p["max_scans"], loop_boot=p["loop_boot"])
