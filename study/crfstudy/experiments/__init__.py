@@ -11,4 +11,5 @@ Modules:
 - :mod:`crfstudy.experiments.scene_figures`: ``draw`` (a grid with the robot's start), ``landscape_figure``
 - :mod:`crfstudy.experiments.occlusion_why`: why the occlusion result does not reproduce (``why_study`` and its tables)
 - :mod:`crfstudy.experiments.speed_tables` / ``speed_figures``: notebook 09's tables and goals figure from ``crfmap bench`` records
+- :mod:`crfstudy.experiments.nav_goals`: issue 38's goal table (notebook 12; ``python -m crfstudy.experiments.nav_goals``)
 """
