@@ -239,7 +239,7 @@ def run(files: dict, settings: GoalSettings, training=None, progress: bool = Tru
     from tqdm.auto import tqdm
 
     from crfmap.assess.scansplit import scan_split
-    from crfmap.commands.build import load_recording
+    from crfmap.io.recordings import load_recording
 
     if not files:
         raise InputError("recordings", "nothing to score")
