@@ -24,7 +24,7 @@ def add_parser(sub):
     p.add_argument("--no-external", action="store_true", help="skip the PGMax / PyMaxflow rows (run when installed)")
     p.add_argument("--only", nargs="+", default=None, metavar="GROUP",
                    help="run only these groups of rows: machine, compile, throughput, converge, memory, online, "
-                   "node, external, goals (e.g. --only node: the live node's rows)")
+                   "node, external, closed-loop, goals (e.g. --only node: the live node's rows)")
     p.add_argument("--no-goals", action="store_true",
                    help="skip issue 13's rows (start times, explorer redraw, reproduce time, 4096^2 convergence)")
     return p

@@ -237,6 +237,7 @@ def compile_seconds(cold=True) -> dict:
 GROUPS = {  # crfmap bench --only: row groups -> the tasks that make them
     "machine": ("machine",), "compile": ("compile",), "throughput": ("throughput",), "converge": ("converge",),
     "memory": ("memory",), "online": ("online",), "node": ("node",), "external": ("external",),
+    "closed-loop": ("closed-loop",),
     "goals": ("start", "explorer", "reproduce", "converge-start", "preset-converge"),
 }
 
@@ -244,6 +245,7 @@ GROUPS = {  # crfmap bench --only: row groups -> the tasks that make them
 def _all_tasks(tasks, quick, sizes, converge_start_size):
     """``tasks`` with every optional group added (``--only`` asks for groups whatever the --no-* flags say)."""
     extra = [("memory", 1024 if quick else max(sizes)), ("online", None), ("node", None), ("external", None),
+             ("closed-loop", None),
              ("start", None), ("explorer", None), ("reproduce", None), ("converge-start", converge_start_size),
              ("preset-converge", None)]
     return tasks + [t for t in extra if t[0] not in {k for k, _ in tasks}]
@@ -284,7 +286,7 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
     if memory:
         tasks.append(("memory", 1024 if quick else max(sizes)))
     if online:
-        tasks += [("online", None)] + ([("node", None)] if node else [])
+        tasks += [("online", None)] + ([("node", None)] if node else []) + [("closed-loop", None)]
     if external:
         tasks.append(("external", None))
     from crfstudy.bench import goals as G
@@ -348,6 +350,10 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
 
             yield from bench_node_refine(quick=quick)
             yield from bench_node_map(quick=quick)
+        elif kind == "closed-loop":
+            from crfstudy.bench.closed_loop import bench_closed_loop
+
+            yield from bench_closed_loop(quick=quick)
         elif kind == "external":
             from crfstudy.bench.external import run_external
 
