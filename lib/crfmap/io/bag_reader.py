@@ -88,6 +88,27 @@ def _reader_errors():
             struct.error, zlib.error, ValueError, KeyError, IndexError)
 
 
+READER_MODULES = ("rosbags", "backports", "compression", "lz4")  # rosbags and its decompressors (zstd, lz4)
+
+
+def raised_by_reader(exc: BaseException) -> bool:
+    """Whether ``exc`` (an Exception) came out of the bag-reading libraries: its innermost Python frame is theirs.
+
+    A bag they cannot decode makes them raise what no list names: ``ZstdError`` for a metadata.yaml claiming
+    zstd on an uncompressed bag, ``TypeError`` from ``ord()`` for an ``.mcap`` of its magic bytes alone. Those
+    are the bag's fault; the same exception from crfmap's own code is not, and stays a traceback.
+
+    >>> raised_by_reader(ValueError("x"))  # never raised: no frame at all
+    False
+    """
+    if not isinstance(exc, Exception):
+        return False
+    tb, last = exc.__traceback__, None
+    while tb is not None:
+        tb, last = tb.tb_next, tb
+    return last is not None and last.tb_frame.f_globals.get("__name__", "").split(".")[0] in READER_MODULES
+
+
 class _Collected:
     """Everything read_bag takes from the messages, before poses are computed."""
 
@@ -209,7 +230,9 @@ def _collect(path, location, scan_topic):
                     c.cmd.append((stamp, float(msg.linear.x), float(msg.angular.z)))
     except InputError:
         raise
-    except errors as exc:
+    except Exception as exc:
+        if not (isinstance(exc, errors) or raised_by_reader(exc)):
+            raise
         raise InputError(path, f"cannot read the bag, corrupt or truncated? ({type(exc).__name__}: {exc})") from None
     c.scan_topic = scan_topic
     return c
