@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cases import CASES, Case, case, cli
-from fixtures import GOOD_YAML, carmen_log, good_grid, good_npy
+from fixtures import GOOD_YAML, carmen_log, good_bag, good_grid, good_npy
 
 
 # --- misread: data lost or misread ------------------------------------------------------------------
@@ -155,3 +155,86 @@ def _good_map(d):
     from fixtures import good_map
 
     return good_map(d)
+
+
+# --- ros2: what the bag-reading libraries raise on a lying or empty bag ---------------------------------
+def _claims_zstd(mode):
+    def setup(d):
+        bag = good_bag(d)  # uncompressed
+        meta = bag / "metadata.yaml"
+        text = meta.read_text()
+        text = text.replace("compression_format: ''", "compression_format: zstd")
+        meta.write_text(text.replace("compression_mode: ''", f"compression_mode: {mode}"))
+        return cli("build", bag, Path(d) / "out.yaml", names=["bag"])
+    return setup
+
+
+CASES.append(Case("ros2", "metadata-claims-zstd-file-compression", _claims_zstd("FILE")))
+CASES.append(Case("ros2", "metadata-claims-zstd-message-compression", _claims_zstd("MESSAGE")))
+
+
+@case("ros2", "mcap-of-its-magic-alone")
+def _(d):
+    (Path(d) / "m.mcap").write_bytes(b"\x89MCAP0\r\n")
+    return cli("build", Path(d) / "m.mcap", Path(d) / "out.yaml", names=["m.mcap"])
+
+
+@case("ros2", "mcap-of-its-magic-alone-in-a-bag-folder")
+def _(d):
+    bag = good_bag(d)
+    for f in bag.glob("*.mcap"):
+        f.write_bytes(b"\x89MCAP0\r\n")
+    return cli("build", bag, Path(d) / "out.yaml", names=["bag"])
+
+
+# --- environment: the middleware's configuration, thread counts, the kernel cache ------------------------
+def _node_refine_with(uri):
+    def setup(d):
+        return dict(cli("node", "refine", names=["CYCLONEDDS_URI"]),
+                    env={"CYCLONEDDS_URI": uri.format(d=d), "ROS_DOMAIN_ID": "0"})
+    return setup
+
+
+CASES.append(Case("environment", "CYCLONEDDS_URI-missing-file", _node_refine_with("{d}/cyclonedds.xml")))
+CASES.append(Case("environment", "CYCLONEDDS_URI-file-uri-missing", _node_refine_with("file://{d}/none.xml")))
+CASES.append(Case("environment", "CYCLONEDDS_URI-not-xml", _node_refine_with("<CycloneDDS><Domain")))
+CASES.append(Case("environment", "CYCLONEDDS_URI-unknown-interface", _node_refine_with(
+    "<CycloneDDS><Domain><General><Interfaces><NetworkInterface name='nosuch0'/></Interfaces></General></Domain>"
+    "</CycloneDDS>")))
+CASES.append(Case("environment", "CYCLONEDDS_URI-http", _node_refine_with("http://example.com/dds.xml")))
+
+
+@case("environment", "NUMBA_NUM_THREADS=1000-under-a-memory-limit", subprocess=True)
+def _(d):  # numba would start 1000 OpenMP threads at its first parallel loop: libgomp aborts under RLIMIT_AS
+    good_npy(d)
+    return dict(cli("infer", Path(d) / "in.npy", Path(d) / "out.npy", names=["NUMBA_NUM_THREADS"]),
+                env={"NUMBA_NUM_THREADS": "1000"})
+
+
+@case("environment", "NUMBA_CACHE_DIR-unwritable-usage-error-named-first")
+def _(d):  # a user who cannot write the venv's cache still reads the command line's own error (and --help)
+    good_npy(d)
+    return dict(cli("infer", Path(d) / "in.npy", names=["output"]), env={"NUMBA_CACHE_DIR": "/proc/crfmap-numba"})
+
+
+# --- output: standard output on a full disk --------------------------------------------------------------
+def _whole_npy(d):
+    from crfmap.io.grid_files import load_grid
+
+    try:
+        grid = load_grid(Path(d) / "out.npy")
+    except Exception as exc:  # noqa: BLE001  (any failure to read it back is the finding)
+        return f"out.npy not whole: {exc}"
+    return None if grid.shape == good_grid().shape else f"out.npy has shape {grid.shape}"
+
+
+@case("output", "infer-stdout-on-a-full-disk")
+def _(d):  # the outputs are complete before the report fails: the line says so (it used to say nothing was written)
+    return dict(cli("infer", good_npy(d), Path(d) / "out.npy", names=["standard output"]), stdout="full",
+                written=["out.npy", "out.npy.yaml"], whole=_whole_npy)
+
+
+@case("output", "infer-stdout-on-a-full-disk-child", subprocess=True)
+def _(d):
+    return dict(cli("infer", good_npy(d), Path(d) / "out.npy", names=["standard output"]), stdout="full",
+                written=["out.npy", "out.npy.yaml"], whole=_whole_npy)
