@@ -238,3 +238,40 @@ def _(d):  # the outputs are complete before the report fails: the line says so 
 def _(d):
     return dict(cli("infer", good_npy(d), Path(d) / "out.npy", names=["standard output"]), stdout="full",
                 written=["out.npy", "out.npy.yaml"], whole=_whole_npy)
+
+
+# --- api: the learning functions (crfmap.assess.learning) with arguments of the wrong shape or kind --------
+def _learning(function, *args, **kw):
+    from crfmap.assess import learning
+
+    observed = np.full((6, 6), 0.5)
+    truth = np.zeros((6, 6))
+    truth[2:4] = 1.0
+    if function.startswith("learn_"):
+        kw.setdefault("progress", False)
+    return getattr(learning, function)(observed, truth, *args, **kw)
+
+
+_HIDDEN, _LINK = [[10.0, 1.0], [1.0, 10.0]], [[1.0, 0.0], [0.0, 1.0]]
+_api("learning-pseudolikelihood-mask-of-another-shape",
+     lambda d, m: _learning("pseudolikelihood", _HIDDEN, _LINK, mask=np.ones((5, 5), bool)), ["mask"])
+_api("learning-pseudolikelihood-mask-of-floats",
+     lambda d, m: _learning("pseudolikelihood", _HIDDEN, _LINK, mask=np.full((6, 6), 0.3)), ["mask"])
+_api("learning-pseudolikelihood-mask-empty",
+     lambda d, m: _learning("pseudolikelihood", _HIDDEN, _LINK, mask=np.zeros((6, 6), bool)), ["mask"])
+_api("learning-fit-mask-a-row", lambda d, m: _learning("learn_pseudolikelihood", mask=np.ones(6, bool)), ["mask"])
+_api("learning-hidden-3x3", lambda d, m: _learning("learn_gradient", np.ones((3, 3))), ["hidden"])
+_api("learning-link-a-pair", lambda d, m: _learning("learn_thesis", _HIDDEN, np.ones(2)), ["link"])
+_api("learning-rescale-3x3", lambda d, m: _imp("crfmap.assess.learning", "rescale")(np.ones((3, 3)), _LINK),
+     ["hidden"])
+_api("learning-lbp-options-a-list", lambda d, m: _learning("learn_thesis", lbp_options=[("max_iter", 2)]),
+     ["lbp_options"])
+_api("learning-lbp-options-unknown-key", lambda d, m: _learning("lbp_mse", _HIDDEN, _LINK, {"iterations": 2}),
+     ["lbp_options"])
+_api("learning-thesis-alpha-text", lambda d, m: _learning("learn_thesis", alpha="0.1"), ["alpha"])
+_api("learning-thesis-max-rounds-text", lambda d, m: _learning("learn_thesis", max_rounds="3"), ["max_rounds"])
+_api("learning-gradient-steps-text", lambda d, m: _learning("learn_gradient", steps="3"), ["steps"])
+_api("learning-gradient-delta-zero", lambda d, m: _learning("learn_gradient", delta=0.0), ["delta"])
+_api("learning-pl-learning-rate-text", lambda d, m: _learning("learn_pseudolikelihood", learning_rate="a"),
+     ["learning_rate"])
+_api("learning-pl-tol-nan", lambda d, m: _learning("learn_pseudolikelihood", tol=float("nan")), ["tol"])
