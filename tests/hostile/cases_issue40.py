@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cases import CASES, Case, case, cli
-from fixtures import GOOD_YAML, carmen_log, good_bag, good_grid, good_npy
+from fixtures import GOOD_YAML, carmen_log, good_bag, good_grid, good_npy, tf_bag
 
 
 # --- misread: data lost or misread ------------------------------------------------------------------
@@ -275,3 +275,87 @@ _api("learning-gradient-delta-zero", lambda d, m: _learning("learn_gradient", de
 _api("learning-pl-learning-rate-text", lambda d, m: _learning("learn_pseudolikelihood", learning_rate="a"),
      ["learning_rate"])
 _api("learning-pl-tol-nan", lambda d, m: _learning("learn_pseudolikelihood", tol=float("nan")), ["tol"])
+
+
+# --- ros1 / ros2: fields that lie about sizes and places ------------------------------------------------
+def _patched_chunk(d, patch):
+    """A good ROS 1 bag whose first chunk record is changed by ``patch(data, pos, header_length, header)``."""
+    import struct
+
+    from crfmap.io.rosbag1_files import BAG_MAGIC, OP_CHUNK, parse_header_fields
+
+    path = good_bag(d, "b.bag", fmt="ros1")
+    data = bytearray(path.read_bytes())
+    pos = len(BAG_MAGIC)
+    while pos < len(data):
+        (header_length,) = struct.unpack_from("<I", data, pos)
+        header = bytes(data[pos + 4: pos + 4 + header_length])
+        if parse_header_fields(header)["op"] == bytes([OP_CHUNK]):
+            patch(data, pos, header_length, header)
+            break
+        pos += 8 + header_length + struct.unpack_from("<I", data, pos + 4 + header_length)[0]
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _chunk_case(name, patch):
+    CASES.append(Case("ros1", name, lambda d: cli("build", _patched_chunk(d, patch), Path(d) / "out.yaml",
+                                                   names=["b.bag"])))
+
+
+def _stated_size(value=None):
+    """The chunk's ``size`` field set to ``value`` (None: one byte more than it stores)."""
+    def patch(data, pos, header_length, header):
+        import struct
+
+        stored = struct.unpack_from("<I", data, pos + 4 + header_length)[0]
+        at = pos + 4 + header.index(b"size=") + len(b"size=")
+        data[at: at + 4] = (stored + 1 if value is None else value).to_bytes(4, "little")
+    return patch
+
+
+def _data_length(value):
+    def patch(data, pos, header_length, header):
+        data[pos + 4 + header_length: pos + 8 + header_length] = value.to_bytes(4, "little")
+    return patch
+
+
+def _compression(name):
+    def patch(data, pos, header_length, header):
+        at = pos + 4 + header.index(b"compression=none") + len(b"compression=")
+        data[at: at + 4] = name
+    return patch
+
+
+_chunk_case("chunk-states-0xFFFFFFFF-bytes", _stated_size(0xFFFFFFFF))
+_chunk_case("chunk-states-one-byte-more", _stated_size())
+_chunk_case("chunk-data-length-0xFFFFFFFF", _data_length(0xFFFFFFFF))
+_chunk_case("chunk-compression-unknown", _compression(b"zzzz"))
+
+
+@case("ros2", "tf-translation-1e300")
+def _(d):
+    return cli("build", tf_bag(d, (0.0, 0.0, 0.0, 1.0), x0=1e300), Path(d) / "out.yaml", names=["tfbag"])
+
+
+@case("ros1", "tf-translation-2e8")
+def _(d):  # beyond crfmap.grid.MAX_EXTENT_M (1e8 m); UTM's 1e7 m northings stay accepted
+    return cli("build", tf_bag(d, (0.0, 0.0, 0.0, 1.0), fmt="ros1", x0=2e8), Path(d) / "out.yaml",
+               names=["tfbag.bag"])
+
+
+@case("unbounded", "node-transform-1e300")
+def _(d):
+    def call():
+        from types import SimpleNamespace as NS
+
+        from crfmap.errors import InputError
+        from crfmap.ros.messages import transforms_of
+
+        header = NS(stamp=NS(sec=1, nanosec=0), frame_id="odom")
+        far = NS(header=header, child_frame_id="base_link",
+                 transform=NS(translation=NS(x=1e300, y=0.0, z=0.0), rotation=NS(x=0.0, y=0.0, z=0.0, w=1.0)))
+        transforms, faults = transforms_of(NS(transforms=[far]))
+        if faults:  # what the node logs (once a kind) before it goes on without the transform
+            raise InputError("/tf", f"{faults[0].reason} [{faults[0].kind}]")
+    return dict(call=call, names=["/tf"])

@@ -28,6 +28,7 @@ from crfmap.io._rosmsgs import (CMD_VEL_TOPIC, MAP_TOPIC, ODOM_TOPIC, SCAN_TOPIC
                        T_TWIST, TF_STATIC_TOPIC, TF_TOPIC, TF_TYPES, TRUTH_TOPIC, grid_from_message, pose_of,
                        to_seconds, typestore)
 from crfmap.checks import check_input_file, check_path_arg
+from crfmap.io.rosbag1_files import BAG_MAGIC, check_records
 from crfmap.errors import InputError
 from crfmap.frames import TfTree, compose, interpolate_poses
 from crfmap.recording import Recording, ScanSet, Trajectory
@@ -50,6 +51,8 @@ def _bag_location(path: Path):
         return path, "ros2"
     if path.suffix == ".bag":
         check_input_file(path, "ROS1 bag file")  # a FIFO would block the reader
+        if _starts_with(path, BAG_MAGIC):  # its records within the file, its chunks' sizes true (else rosbags says)
+            check_records(path)
         return path, "ros1"
     if path.name == "metadata.yaml" or path.suffix in (".db3", ".mcap"):
         if (path.parent / "metadata.yaml").exists():
@@ -59,6 +62,11 @@ def _bag_location(path: Path):
             return path, "ros2"
         raise InputError(path, "no metadata.yaml beside it: not part of a ROS2 bag folder")
     raise InputError(path, "not a ROS bag (expected a ROS1 .bag file or a ROS2 bag folder)")
+
+
+def _starts_with(path, magic: bytes) -> bool:
+    with open(path, "rb") as f:
+        return f.read(len(magic)) == magic
 
 
 def _check_metadata(path, metadata):
