@@ -359,3 +359,56 @@ def _(d):
         if faults:  # what the node logs (once a kind) before it goes on without the transform
             raise InputError("/tf", f"{faults[0].reason} [{faults[0].kind}]")
     return dict(call=call, names=["/tf"])
+
+
+# --- api: garbage once accepted: float masks, preset fields of the wrong kind, tables beyond the dtype ------
+def _preset_with(**fields):
+    from dataclasses import replace
+
+    from crfmap.crf.presets import get_preset
+
+    return replace(get_preset(), **fields).refine(np.full((4, 4), 0.5))
+
+
+_api("infer-region-of-floats", lambda d, m: _infer(region=np.full((4, 4), 0.3)), ["region"])
+_api("infer-region-of-ints", lambda d, m: _infer(region=np.ones((4, 4), int)), ["region"])
+_api("near-cells-mask-of-floats", lambda d, m: _imp("crfmap.crf.inference.regions", "near_cells")(
+    np.full((4, 4), 0.3), 1), ["mask"])
+_api("preset-refine-within-of-floats", lambda d, m: _imp("crfmap.crf.presets", "get_preset")().refine(
+    np.full((4, 4), 0.5), within=np.full((4, 4), 0.3)), ["within"])
+_api("preset-margin-2.5", lambda d, m: _preset_with(margin=2.5), ["margin"])
+_api("preset-margin-True", lambda d, m: _preset_with(margin=True), ["margin"])
+_api("preset-limit-NaN", lambda d, m: _preset_with(limit=float("nan")), ["limit"])
+_api("preset-occupied-one-number", lambda d, m: _preset_with(occupied=(1.5,)), ["occupied"])
+_api("preset-hidden-3x3", lambda d, m: _preset_with(hidden=np.ones((3, 3))), ["hidden"])
+_api("infer-float32-hidden-1e39", lambda d, m: _infer(hidden=[[1e39, 1.0], [1.0, 10.0]], dtype=np.float32,
+                                                      schedule="flooding"), ["hidden"])
+_api("infer-float32-link-1e-39", lambda d, m: _infer(link=[[1.0, 1e-39], [1e-39, 1.0]], dtype=np.float32),
+     ["link"])
+_api("save-grid-trailing-slash", lambda d, m: _imp("crfmap.io.grid_files", "save_grid")(good_grid(),
+                                                                                        str(d / "out.npy") + "/"),
+     ["out.npy/"])
+_api("load-grid-trailing-slash", lambda d, m: _imp("crfmap.io.grid_files", "load_grid")(str(m) + "/"), ["in.npy/"],
+     prep=lambda d: good_npy(d))
+
+
+# --- output: names that are not grid files, refused before the work ---------------------------------------
+@case("output", "infer-output-trailing-slash")
+def _(d):
+    return cli("infer", good_npy(d), str(Path(d) / "out.npy") + "/", names=["out.npy/"])
+
+
+@case("output", "infer-yaml-output-trailing-slash")
+def _(d):
+    return cli("infer", good_npy(d), str(Path(d) / "out.yaml") + "/", names=["out.yaml/"])
+
+
+@case("output", "build-output-trailing-slash")
+def _(d):
+    return cli("build", carmen_log(d), str(Path(d) / "out.npy") + "/", names=["out.npy/"])
+
+
+@case("potentials", "infer-float32-hidden-1e39")
+def _(d):
+    return cli("infer", good_npy(d), Path(d) / "out.npy", "--float32", "--hidden", "1e39,1,1,10",
+               "--schedule", "flooding", names=["--hidden"])

@@ -52,13 +52,13 @@ def add_parser(sub):
 
 def _check_options(args, hidden, link):
     """Options that cannot work, refused before any work is done."""
-    import math
 
     import numpy as np
 
     from crfmap.checks import check_int, check_number
-    from crfmap.commands.outputs import check_output
+    from crfmap.commands.outputs import check_grid_output, check_output
 
+    check_grid_output(args.output)
     if not str(args.output).lower().endswith((".yaml", ".yml")) and args.mode is not None:
         raise InputError("--mode", f"applies to map_server YAML outputs only, not to {args.output}")
     if args.tol is not None:
@@ -71,16 +71,11 @@ def _check_options(args, hidden, link):
     for flag, value in (("--free-thresh", args.free_thresh), ("--occupied-thresh", args.occupied_thresh)):
         if value is not None:
             check_number(flag, value, low=0.0, high=1.0)
-    if args.float32:  # every entry must survive float32, or the kernels would see inf or 0
-        info = np.finfo(np.float32)
+    if args.float32:  # every entry must survive float32, or the kernels would see inf or 0 (infer's own rule)
+        from crfmap.crf.model.potentials import check_table_fits
+
         for flag, table in (("--hidden", hidden), ("--link", link)):
-            values = np.asarray(table, np.float64)
-            positive = values[values > 0]
-            if positive.size and (positive.max() > info.max / 16 or positive.min() < info.tiny):
-                raise InputError(flag, f"entries {values.ravel().tolist()} do not fit float32 "
-                                       f"({info.tiny:.1e} .. {info.max / 16:.1e}); rescale the table or drop --float32")
-            if not math.isfinite(float(values.max())):
-                raise InputError(flag, "entries must be finite")
+            check_table_fits(table, np.float32, flag)
     check_output([args.input], args.output, force=args.force)
 
 
