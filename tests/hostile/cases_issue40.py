@@ -412,3 +412,19 @@ def _(d):
 def _(d):
     return cli("infer", good_npy(d), Path(d) / "out.npy", "--float32", "--hidden", "1e39,1,1,10",
                "--schedule", "flooding", names=["--hidden"])
+
+
+# --- signals: a run as long as the user asked (tol 0, a huge max_iter) stops cleanly on Ctrl-C ----------------
+def _long_lbp(d):
+    from crfmap.grid import OccupancyGrid
+    from crfmap.io.grid_files import save_grid
+
+    rng = np.random.default_rng(0)
+    save_grid(OccupancyGrid(np.clip(rng.random((256, 256)), 0.01, 0.99), 0.05), Path(d) / "in.npy")
+    return cli("infer", Path(d) / "in.npy", Path(d) / "out.npy", "--preset", "thesis", "--tol", "0",
+               "--max-iter", "1000000000", names=["interrupted"])
+
+
+for _sig_name, _sig_number in (("SIGINT", 2), ("SIGTERM", 15)):
+    CASES.append(Case("signals", f"infer-tol-0-max-iter-1e9-{_sig_name}", _long_lbp, subprocess=True,
+                      signal=_sig_number, expect_rc=128 + _sig_number, extra={"signal_after": 10.0}))

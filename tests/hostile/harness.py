@@ -146,8 +146,19 @@ def _child_limits(fsize):
     return apply
 
 
+def _cpu_seconds(pid) -> float:
+    """User + system CPU seconds process ``pid`` has used (0 once it is gone)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def run_subprocess(case, spec, d):
-    """(exit status, stderr text) of a child ``crfmap`` process; signals are sent once a temporary appears."""
+    """(exit status, stderr text) of a child ``crfmap`` process; signals are sent once a temporary appears (or
+    ``signal_after`` seconds of the child's CPU time into the run, a case's ``extra``: its imports done however
+    busy the machine)."""
     entry = ENTRIES[case.entry]
     if case.fault not in (None, "fsize"):
         code = (f"import sys; sys.path.insert(0, {str(HERE)!r}); from faults import fault; "
@@ -164,8 +175,9 @@ def run_subprocess(case, spec, d):
         stdout.close()
     start = time.monotonic()
     sent = case.signal is None
+    after = case.extra.get("signal_after")  # CPU seconds into the work (a long LBP run: no temporary exists yet)
     while not sent and proc.poll() is None and time.monotonic() - start < HANG_LIMIT:
-        if any(n.startswith(".") for n in os.listdir(d)):
+        if (_cpu_seconds(proc.pid) >= after) if after is not None else any(n.startswith(".") for n in os.listdir(d)):
             proc.send_signal(case.signal)
             sent = True
         else:
