@@ -52,7 +52,10 @@ def _bag_location(path: Path):
     if path.suffix == ".bag":
         check_input_file(path, "ROS1 bag file")  # a FIFO would block the reader
         if _starts_with(path, BAG_MAGIC):  # its records within the file, its chunks' sizes true (else rosbags says)
-            check_records(path)
+            try:
+                check_records(path)
+            except InputError as exc:
+                raise InputError(path, f"cannot read the bag: {exc.problem}") from None
         return path, "ros1"
     if path.name == "metadata.yaml" or path.suffix in (".db3", ".mcap"):
         if (path.parent / "metadata.yaml").exists():
