@@ -63,6 +63,28 @@ def check_int(name, value, low=None, high=None) -> int:
     return value
 
 
+def check_mask(name, mask, shape=None) -> np.ndarray:
+    """``mask`` as a boolean array (2-D, of ``shape`` when given); InputError naming ``name`` for another dtype.
+
+    A mask of floats or integers would be read by truth value (0.3 and 2 both True): P(occupied) or a label
+    image passed where cells are chosen, silently choosing almost every cell. Say which cells: ``p > 0.5``.
+
+    >>> check_mask("region", np.full((2, 2), 0.3))
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: region: expected a boolean mask (True: the cell is chosen), got float64 values (write e.g. values > 0.5)
+    """
+    values = np.asarray(mask)
+    if values.dtype != np.bool_:
+        raise InputError(name, f"expected a boolean mask (True: the cell is chosen), got {values.dtype} values "
+                               "(write e.g. values > 0.5)")
+    if values.ndim != 2:
+        raise InputError(name, f"expected a 2-D [y, x] mask, got shape {values.shape}")
+    if shape is not None and values.shape != tuple(shape):
+        raise InputError(name, f"mask shape {values.shape} does not match the grid {tuple(shape)}")
+    return values
+
+
 def check_settings(name, value, classes: dict, wanted: str):
     """``value`` if it is an instance of one of ``classes`` ({name: settings class}), or the class called ``value``
     with its defaults; else InputError ``name: {wanted}, got {value!r}`` (a schedule, a drive, ...).
@@ -166,19 +188,28 @@ def check_input_file(path, what, missing=None):
     return path
 
 
-def check_path_arg(path, what="file name"):
-    """``path`` as a Path; InputError for anything that is not a str or os.PathLike (None, numbers, lists).
+def check_path_arg(path, what="file name", file=False):
+    """``path`` as a Path; InputError for anything that is not a str or os.PathLike (None, numbers, lists), and
+    (``file``) for a name ending in a path separator: ``Path("out.npy/")`` is ``out.npy``, and a write would
+    make the file a folder name promised not to be.
 
     >>> check_path_arg(None)
     Traceback (most recent call last):
     ...
     crfmap.errors.InputError: None: expected a file name, got NoneType
+    >>> check_path_arg("out.npy/", file=True)
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: out.npy/: ends in '/', a folder's name; expected a file name
     """
     import os
     from pathlib import Path
 
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(repr(path), f"expected a {what}, got {type(path).__name__}")
+    text = os.fspath(path)
+    if file and isinstance(text, str) and text.endswith(("/", os.sep)):
+        raise InputError(text, f"ends in {text[-1]!r}, a folder's name; expected a {what}")
     return Path(path)
 
 

@@ -55,15 +55,52 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 
-def _os_error_line(exc: OSError) -> str:
-    """One line for a failed file operation: the file, then what went wrong."""
+def _os_error_line(exc: OSError, written=()) -> str:
+    """One line for a failed file operation: the file, then what went wrong (and what was written before it)."""
     name = exc.filename if exc.filename is not None else ""
     what = exc.strerror or str(exc)
     if exc.errno == errno.ENOSPC:
-        what = "no space left on the device (nothing was written)"
+        what = f"no space left on the device ({_written_note(written)})"
     elif exc.errno == errno.EFBIG:
-        what = "file too large for the file-size limit (nothing was written)"
+        what = f"file too large for the file-size limit ({_written_note(written)})"
     return f"{name}: {what}" if name else what
+
+
+def _written_note(written) -> str:
+    """What a failed run leaves: ``nothing was written``, or the outputs it completed before the failure.
+
+    >>> _written_note([]), _written_note(["o.npy", "o.npy.yaml"])
+    ('nothing was written', 'written before it, complete: o.npy, o.npy.yaml')
+    """
+    return f"written before it, complete: {', '.join(map(str, written))}" if written else "nothing was written"
+
+
+STDOUT_NAME = "standard output"
+
+
+class _Stdout:
+    """``sys.stdout`` whose failed writes name it: an OSError from ``print`` names no file (stdout on /dev/full,
+    a full disk, a closed pipe), and would read as the failure of an output file."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def _named(self, call, *args):
+        try:
+            return call(*args)
+        except OSError as exc:
+            if exc.filename is not None:
+                raise
+            raise OSError(exc.errno, exc.strerror or str(exc), STDOUT_NAME) from None
+
+    def write(self, text):
+        return self._named(self._stream.write, text)
+
+    def flush(self):
+        return self._named(self._stream.flush)
+
+    def __getattr__(self, attr):
+        return getattr(self._stream, attr)
 
 
 def _input_name(args) -> str:
@@ -74,11 +111,15 @@ def main(argv=None) -> int:
     from crfmap import environment
 
     try:  # before the sub-commands import numba, which reads NUMBA_NUM_THREADS once and fails on 0
-        environment.prepare()
+        environment.prepare(cache=False)
     except CrfmapError as exc:
         return _fail(f"crfmap: error: {exc}")
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # --help and usage errors end here: they need no kernel cache
+    try:
+        environment.prepare_cache()
+    except CrfmapError as exc:
+        return _fail(f"crfmap: error: {exc}")
     previous = os.environ.get("CRFMAP_MAX_CELLS")
     if args.max_cells is not None:
         try:
@@ -96,28 +137,35 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    from crfmap.io.atomic import Interrupted, signals_raise
+    from crfmap.io.atomic import Interrupted, record_written, signals_raise
 
     prefix = f"crfmap {args.command}"
+    stdout = sys.stdout
     # Warnings wait until the run succeeds: a failed run prints its one error line and nothing else.
-    with warnings.catch_warnings(record=True) as caught, signals_raise():
+    with warnings.catch_warnings(record=True) as caught, signals_raise(), record_written() as written:
         warnings.simplefilter("default")
+        sys.stdout = _Stdout(stdout)
         try:
             status = args._run(args)
+            sys.stdout.flush()  # a report that cannot be written fails here, where it is named, not at exit
         except CrfmapError as exc:
             return _fail(f"{prefix}: error: {exc}")
         except Interrupted as exc:
-            return _fail(f"{prefix}: {exc}; nothing was written", 128 + exc.signum)
+            return _fail(f"{prefix}: {exc}; {_written_note(written)}", 128 + exc.signum)
         except KeyboardInterrupt:
-            return _fail(f"{prefix}: interrupted; nothing was written", 130)
+            return _fail(f"{prefix}: interrupted; {_written_note(written)}", 130)
         except FileNotFoundError as exc:
             return _fail(f"{prefix}: error: {exc.filename}: no such file or folder")
         except OSError as exc:
-            return _fail(f"{prefix}: error: {_os_error_line(exc)}")
+            if exc.filename == STDOUT_NAME and exc.errno not in (errno.ENOSPC, errno.EFBIG):
+                return _fail(f"{prefix}: error: {STDOUT_NAME}: {exc.strerror or exc} ({_written_note(written)})")
+            return _fail(f"{prefix}: error: {_os_error_line(exc, written)}")
         except RecursionError:
             return _fail(f"{prefix}: error: {_input_name(args)}: input nested too deeply")
         except MemoryError:
             return _fail(f"{prefix}: error: {_input_name(args)}: out of memory (a smaller input or --max-cells?)")
+        finally:
+            sys.stdout = stdout
     for w in caught:  # one line each (the message names the input), not Python's "file:line: category" pair
         print(_warning_line(prefix, w), file=sys.stderr)
     return int(status or 0)

@@ -9,7 +9,7 @@ variable               read by                          accepted
 ``CRFMAP_MAX_CELLS``   :func:`crfmap.checks.max_cells`  a whole number >= 1 (``4e8`` too); no "no limit"
 ``CRFMAP_RUN``         :mod:`crfstudy.repro.provenance`   a JSON object (set by :mod:`crfstudy.repro.run`)
 ``CRFMAP_REPRODUCE_STARTED`` :mod:`crfstudy.repro.buildinfo` a Unix time (set by ``make reproduce`` for the paper)
-``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number >= 1 (checked then)
+``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number from 1 to the usable cores (checked then)
 ``NUMBA_CACHE_DIR``    numba, :mod:`crfmap._numba_cache` a folder numba can write (existing or not)
 ``OMP_WAIT_POLICY``    OpenMP (numba's parallel loops)  set to ``PASSIVE`` by :func:`prepare` unless set
 =====================  ===============================  ===========================================
@@ -130,7 +130,19 @@ def numba_threads() -> int | None:
     value = int(text)
     if value < 1:
         raise InputError(_named("NUMBA_NUM_THREADS", text), "must be at least 1 (numba refuses 0)")
+    cores = usable_cores()
+    if value > cores:  # numba starts them all at its first parallel loop: 1000 under a memory limit abort in libgomp
+        raise InputError(_named("NUMBA_NUM_THREADS", text), f"more threads than the {cores} cores this process may "
+                         f"use (at most {cores}; more only slows LBP down)")
     return value
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity; else the machine's count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
 
 
 def quiet_openmp_threads() -> None:
@@ -190,15 +202,17 @@ def reproduce_started() -> float | None:
     return value
 
 
-def check() -> None:
+def check(cache=True) -> None:
     """Check every variable an entry point depends on before it starts (InputError naming the first bad one).
 
     The same checks as where each is read (:mod:`crfstudy.paths`, :func:`crfmap.checks.max_cells`, ...).
+    ``cache`` False: all but ``NUMBA_CACHE_DIR`` (what reading the command line needs: ``--help`` compiles nothing).
 
     >>> check()
     """
     numba_threads()
-    numba_cache_dir()
+    if cache:
+        numba_cache_dir()
     number("CRFMAP_MAX_CELLS", "cells")
     run_context()
     reproduce_started()
@@ -207,16 +221,25 @@ def check() -> None:
     folder("CRFMAP_DATA")
 
 
-def prepare() -> None:
+def prepare(cache=True) -> None:
     """Ready this process for crfmap's kernels; the entry points call it first, a library user may (optional).
 
     Checks every variable (:func:`check`) before numba reads ``NUMBA_NUM_THREADS``; where the package's own
     ``__pycache__`` folders are read-only and ``NUMBA_CACHE_DIR`` is unset, points numba at a user cache folder
     (:func:`crfmap._numba_cache.configure`); sets ``OMP_WAIT_POLICY=PASSIVE`` unless set (see above). Importing
-    crfmap does none of this.
+    crfmap does none of this. ``cache`` False leaves the cache folder to :func:`prepare_cache`, called once
+    the work is known to need kernels (the ``crfmap`` command: after its command line is read, so that ``--help``
+    and a usage error work for a user who cannot write the venv's cache).
     """
-    check()
+    check(cache=False)
+    quiet_openmp_threads()
+    if cache:
+        prepare_cache()
+
+
+def prepare_cache() -> None:
+    """Check ``NUMBA_CACHE_DIR`` (set: writable) or choose one (:func:`crfmap._numba_cache.configure`)."""
+    numba_cache_dir()
     from crfmap._numba_cache import configure
 
     configure()
-    quiet_openmp_threads()

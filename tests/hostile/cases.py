@@ -3,7 +3,9 @@
 Each case's ``setup(d)`` writes its files into the folder ``d`` and returns ``argv`` (a
 ``crfmap`` command line) or ``call`` (a library call), plus ``names``: strings of which the
 one error line must contain at least one (the input it is about), and optionally ``env``:
-environment variables set for the run (a value of None removes one). Every case must end in a
+environment variables set for the run (a value of None removes one), ``stdout``: ``"full"`` (standard
+output on a full disk), ``written``: outputs completed before the failure, which the line must name
+(``whole(d)``: what is wrong with them, or None). Every case must end in a
 refusal: exit status 2 (library: an InputError), exactly one stderr line naming the input,
 no traceback, the folder unchanged (no output, previous output intact, no temporary file),
 in bounded time and memory. ``fault`` makes writes fail (see faults.py); ``subprocess``

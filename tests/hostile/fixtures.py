@@ -93,8 +93,9 @@ def good_bag(d, name="bag", fmt="ros2"):
     return path
 
 
-def tf_bag(d, quaternion, name="tfbag", fmt="ros2"):
-    """A bag whose /tf odom -> base_link uses ``quaternion`` (x, y, z, w) and a scan in base_link."""
+def tf_bag(d, quaternion, name="tfbag", fmt="ros2", x0=0.0):
+    """A bag whose /tf odom -> base_link uses ``quaternion`` (x, y, z, w) and a scan in base_link; the robot
+    drives along x from ``x0`` [m]."""
 
     from crfmap.io._rosmsgs import typestore
 
@@ -126,7 +127,7 @@ def tf_bag(d, quaternion, name="tfbag", fmt="ros2"):
         c_scan = w.add_connection("/scan", tmsg("sensor_msgs/msg/LaserScan"), typestore=store)
         for k, t in enumerate((1.0, 1.5, 2.0, 2.5)):
             q = T["geometry_msgs/msg/Quaternion"](x=quaternion[0], y=quaternion[1], z=quaternion[2], w=quaternion[3])
-            tr = T["geometry_msgs/msg/Transform"](translation=T["geometry_msgs/msg/Vector3"](x=0.1 * k, y=0.0, z=0.0),
+            tr = T["geometry_msgs/msg/Transform"](translation=T["geometry_msgs/msg/Vector3"](x=x0 + 0.1 * k, y=0.0, z=0.0),
                                                   rotation=q)
             ts = T["geometry_msgs/msg/TransformStamped"](header=header(t, "odom"), child_frame_id="base_link",
                                                          transform=tr)

@@ -80,6 +80,15 @@ def _apply(env, changes):
             env[name] = value
 
 
+class FullStdout(io.StringIO):
+    """Standard output on a full disk (``> /dev/full``): every write fails with ENOSPC, naming no file."""
+
+    def write(self, text):
+        import errno
+
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
 def run_inprocess(case, spec, d):
     """(exit status, stderr text) of running ``spec`` here, with the case's fault and environment."""
     import importlib
@@ -97,7 +106,8 @@ def run_inprocess(case, spec, d):
     cwd = os.getcwd()
     os.chdir(d)
     try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), fault(case.fault, d), \
+        out = FullStdout() if spec.get("stdout") == "full" else io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out), fault(case.fault, d), \
                 environment(spec.get("env", {})):
             if "call" in spec:
                 try:
@@ -136,8 +146,19 @@ def _child_limits(fsize):
     return apply
 
 
+def _cpu_seconds(pid) -> float:
+    """User + system CPU seconds process ``pid`` has used (0 once it is gone)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def run_subprocess(case, spec, d):
-    """(exit status, stderr text) of a child ``crfmap`` process; signals are sent once a temporary appears."""
+    """(exit status, stderr text) of a child ``crfmap`` process; signals are sent once a temporary appears (or
+    ``signal_after`` seconds of the child's CPU time into the run, a case's ``extra``: its imports done however
+    busy the machine)."""
     entry = ENTRIES[case.entry]
     if case.fault not in (None, "fsize"):
         code = (f"import sys; sys.path.insert(0, {str(HERE)!r}); from faults import fault; "
@@ -147,12 +168,16 @@ def run_subprocess(case, spec, d):
         code = f"import sys; sys.path.insert(0, {str(HERE)!r}); from {entry} import main; sys.exit(main(sys.argv[1:]))"
     env = dict(os.environ, PYTHONWARNINGS="default")
     _apply(env, spec.get("env", {}))
-    proc = subprocess.Popen([sys.executable, "-c", code, *spec["argv"]], cwd=d, env=env, stdout=subprocess.DEVNULL,
+    stdout = open("/dev/full", "w") if spec.get("stdout") == "full" else subprocess.DEVNULL  # noqa: SIM115
+    proc = subprocess.Popen([sys.executable, "-c", code, *spec["argv"]], cwd=d, env=env, stdout=stdout,
                             stderr=subprocess.PIPE, text=True, preexec_fn=_child_limits(case.fault == "fsize"))
+    if stdout is not subprocess.DEVNULL:
+        stdout.close()
     start = time.monotonic()
     sent = case.signal is None
+    after = case.extra.get("signal_after")  # CPU seconds into the work (a long LBP run: no temporary exists yet)
     while not sent and proc.poll() is None and time.monotonic() - start < HANG_LIMIT:
-        if any(n.startswith(".") for n in os.listdir(d)):
+        if (_cpu_seconds(proc.pid) >= after) if after is not None else any(n.startswith(".") for n in os.listdir(d)):
             proc.send_signal(case.signal)
             sent = True
         else:
@@ -187,6 +212,13 @@ def problems(case, spec, rc, err, before, after):
 
         before = dict(before, **{spec["rival"]: (stat.S_IFDIR, None),
                                  spec["rival"] + "/metadata.yaml": ("file", hashlib.sha1(RIVAL_TEXT).hexdigest())})
+    written = spec.get("written", ())  # outputs completed before a failure (which the error line must name)
+    for name in written:
+        if name not in after:
+            found.append(f"{name} not written")
+        elif lines and name not in lines[-1]:
+            found.append(f"error line does not say {name} was written")
+    after = {k: v for k, v in after.items() if k not in written}
     if after != before:
         added = sorted(set(after) - set(before))
         changed = sorted(k for k in before if after.get(k) != before[k])
@@ -208,7 +240,10 @@ def run_case(case, inprocess=True):
         seconds = time.monotonic() - start
         TIMINGS[f"{case.cls}/{case.name}"] = seconds
         after = snapshot(d)
-        return problems(case, spec, rc, err, before, after), err, seconds
+        found = problems(case, spec, rc, err, before, after)
+        if "whole" in spec and not found:  # the outputs it says were written are complete
+            found += [problem for problem in [spec["whole"](d)] if problem]
+        return found, err, seconds
 
 
 def all_cases():

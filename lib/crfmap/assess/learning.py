@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from crfmap.checks import check_pair
+from crfmap.checks import check_int, check_number, check_pair
 from crfmap.errors import InputError
 from crfmap.crf.inference.lbp import infer
 from crfmap.assess.metrics import mse
@@ -52,10 +52,46 @@ class LearningResult:
     method: str = "thesis"
 
 
+def check_lbp_options(lbp_options) -> dict:
+    """``lbp_options`` as a dict of :func:`crfmap.crf.inference.lbp.infer`'s keyword arguments (None: {}).
+
+    >>> check_lbp_options({"grid": 1})
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: lbp_options: 'grid' is not a keyword option of crfmap.crf.inference.lbp.infer (expected some of dtype, init, max_iter, messages, pairing, region, schedule, threads, tol)
+    """
+    import inspect
+
+    if lbp_options is None:
+        return {}
+    if not isinstance(lbp_options, dict):
+        raise InputError("lbp_options", f"expected a dict of infer's keyword options, got {type(lbp_options).__name__}")
+    allowed = sorted(name for name, p in inspect.signature(infer).parameters.items() if p.kind == p.KEYWORD_ONLY)
+    for key in lbp_options:
+        if key not in allowed:
+            raise InputError("lbp_options", f"{key!r} is not a keyword option of crfmap.crf.inference.lbp.infer "
+                                            f"(expected some of {', '.join(allowed)})")
+    return dict(lbp_options)
+
+
+def check_mask(mask, shape):
+    """``mask`` as a boolean array of ``shape`` that selects at least one cell (None: every cell)."""
+    if mask is None:
+        return np.ones(shape, bool)
+    values = np.asarray(mask)
+    if values.dtype != np.bool_:
+        raise InputError("mask", f"expected a boolean array (True: the cell counts), got dtype {values.dtype}")
+    if values.shape != tuple(shape):
+        raise InputError("mask", f"shape {values.shape} does not match the grids' {tuple(shape)}")
+    if not values.any():
+        raise InputError("mask", "selects no cell")
+    return values
+
+
 def lbp_mse(observed, truth, hidden, link, lbp_options=None) -> float:
     """MSE against the truth of the beliefs LBP gives with these tables."""
     obs, tru = check_pair(observed, truth)
-    result = infer(obs, hidden, link, **(lbp_options or {}))
+    result = infer(obs, hidden, link, **check_lbp_options(lbp_options))
     return mse(result.beliefs, tru)
 
 
@@ -100,10 +136,11 @@ def learn_thesis(
     True
     """
     obs, tru = check_pair(observed, truth)
-    if not (alpha > 0 and min_alpha > 0):
-        raise InputError("alpha", f"alpha and min_alpha must be positive, got {alpha!r}, {min_alpha!r}")
+    alpha = check_number("alpha", alpha, low=0.0, low_open=True)
+    min_alpha = check_number("min_alpha", min_alpha, low=0.0, low_open=True)
+    check_int("max_rounds", max_rounds, low=1)
     tables = np.concatenate([check_table(hidden, "hidden").ravel(), check_table(link, "link").ravel()])
-    opts = dict(lbp_options or {})
+    opts = check_lbp_options(lbp_options)
 
     def score(t):
         return lbp_mse(obs, tru, t[:4].reshape(2, 2), t[4:].reshape(2, 2), opts)
@@ -180,7 +217,12 @@ def learn_gradient(
     """
     obs, tru = check_pair(observed, truth)
     H0, L0 = check_table(hidden, "hidden"), check_table(link, "link")
-    opts = dict(lbp_options or {})
+    check_int("steps", steps, low=1)
+    step_size = check_number("step_size", step_size, low=0.0, low_open=True)
+    min_step = check_number("min_step", min_step, low=0.0, low_open=True)
+    delta = check_number("delta", delta, low=0.0, low_open=True)
+    floor = check_number("floor", floor, low=0.0, low_open=True, high=1.0)
+    opts = check_lbp_options(lbp_options)
     before = lbp_mse(obs, tru, H0, L0, opts)
     theta = _log_entries(H0, L0, floor)
 
@@ -258,7 +300,7 @@ def _pl_terms(obs, tru, mask):
     """What :func:`pseudolikelihood` needs of the grids alone (the same at every step of a fit)."""
     x = tru > 0.5
     n_occ, n_emp = _neighbour_counts(x)
-    keep = np.ones_like(x) if mask is None else np.asarray(mask, bool)
+    keep = check_mask(mask, x.shape)
     o = obs[keep]
     n_occ, n_emp, xk = n_occ[keep], n_emp[keep], x[keep]
     state = np.where(xk, 0, 1)  # index 0 = occupied
@@ -294,8 +336,8 @@ def _pl_value_grad(terms, H, L):
 
 def rescale(hidden, link):
     """Rescale tables to the defaults' scales (hidden max 10, link max 1): LBP is unchanged."""
-    H = np.asarray(hidden, float)
-    L = np.asarray(link, float)
+    H = check_table(hidden, "hidden")
+    L = check_table(link, "link")
     return H * (10.0 / H.max()), L * (1.0 / L.max())
 
 
@@ -320,6 +362,11 @@ def learn_pseudolikelihood(
     learned tables under ``lbp_options``, for comparison with :func:`learn_thesis`.
     """
     obs, tru = check_pair(observed, truth)
+    check_int("steps", steps, low=1)
+    learning_rate = check_number("learning_rate", learning_rate, low=0.0, low_open=True)
+    tol = check_number("tol", tol, low=0.0)
+    floor = check_number("floor", floor, low=0.0, low_open=True, high=1.0)
+    opts = check_lbp_options(lbp_options)
     theta = _log_entries(hidden, link, floor)
     m = np.zeros(8)
     v = np.zeros(8)
@@ -340,6 +387,5 @@ def learn_pseudolikelihood(
         v = b2 * v + (1 - b2) * grad**2
         theta = theta + learning_rate * (m / (1 - b1**t)) / (np.sqrt(v / (1 - b2**t)) + eps)
     H, L = rescale(*_tables(theta))
-    opts = dict(lbp_options or {})
     return LearningResult(H, L, lbp_mse(obs, tru, hidden, link, opts), lbp_mse(obs, tru, H, L, opts), trace,
                           "pseudo-likelihood")

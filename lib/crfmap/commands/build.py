@@ -123,10 +123,10 @@ def add_parser(sub):
 def run(args: argparse.Namespace) -> int:
     from crfmap.mapping.builder import build_grid
 
+    from crfmap.commands.outputs import check_grid_output, check_output
+
+    check_grid_output(args.output)  # before Path() drops a trailing '/'
     out = Path(args.output)
-    if not str(out).lower().endswith(GRID_SUFFIXES):
-        raise InputError(out, "the map must end in .yaml/.yml (map_server) or .npy")
-    from crfmap.commands.outputs import check_output
 
     check_output([args.input], out, force=args.force)
     start = time.perf_counter()

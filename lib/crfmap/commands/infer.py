@@ -29,7 +29,11 @@ def add_parser(sub):
     p.add_argument("--max-iter", type=int, default=None,
                    help="iteration limit (default: the preset's; the thesis used 2)")
     p.add_argument("--tol", type=float, default=None,
-                   help="stop when the largest message change is below this (default: the preset's)")
+                   help="stop when the largest message change is below this (default: the preset's); --tol 0 "
+                   "runs all --max-iter iterations, as asked: --progress shows them, Ctrl-C stops the run and "
+                   "writes nothing")
+    p.add_argument("--progress", action="store_true", default=None,
+                   help="show LBP's iterations and its largest message change (default: when stderr is a terminal)")
     p.add_argument("--damping", type=float, default=0.0, help="weight of the old message, in [0, 1)")
     p.add_argument("--pairing", default=None, choices=["receiver", "oriented"],
                    help="custom --hidden tables only: how a non-symmetric hidden table applies to an edge "
@@ -52,13 +56,13 @@ def add_parser(sub):
 
 def _check_options(args, hidden, link):
     """Options that cannot work, refused before any work is done."""
-    import math
 
     import numpy as np
 
     from crfmap.checks import check_int, check_number
-    from crfmap.commands.outputs import check_output
+    from crfmap.commands.outputs import check_grid_output, check_output
 
+    check_grid_output(args.output)
     if not str(args.output).lower().endswith((".yaml", ".yml")) and args.mode is not None:
         raise InputError("--mode", f"applies to map_server YAML outputs only, not to {args.output}")
     if args.tol is not None:
@@ -71,16 +75,11 @@ def _check_options(args, hidden, link):
     for flag, value in (("--free-thresh", args.free_thresh), ("--occupied-thresh", args.occupied_thresh)):
         if value is not None:
             check_number(flag, value, low=0.0, high=1.0)
-    if args.float32:  # every entry must survive float32, or the kernels would see inf or 0
-        info = np.finfo(np.float32)
+    if args.float32:  # every entry must survive float32, or the kernels would see inf or 0 (infer's own rule)
+        from crfmap.crf.model.potentials import check_table_fits
+
         for flag, table in (("--hidden", hidden), ("--link", link)):
-            values = np.asarray(table, np.float64)
-            positive = values[values > 0]
-            if positive.size and (positive.max() > info.max / 16 or positive.min() < info.tiny):
-                raise InputError(flag, f"entries {values.ravel().tolist()} do not fit float32 "
-                                       f"({info.tiny:.1e} .. {info.max / 16:.1e}); rescale the table or drop --float32")
-            if not math.isfinite(float(values.max())):
-                raise InputError(flag, "entries must be finite")
+            check_table_fits(table, np.float32, flag)
     check_output([args.input], args.output, force=args.force)
 
 
@@ -153,8 +152,11 @@ def kernel_time(kernels, compiling) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    import sys
+
     import numpy as np
 
+    from crfmap.crf.engine import progress
     from crfmap.crf.inference.compiling import compile_timer
 
     if args.max_iter is not None and args.max_iter < 0:
@@ -163,11 +165,15 @@ def run(args: argparse.Namespace) -> int:
     solver = preset.solver()  # the preset's solver, each option the user gave replacing its setting
     schedule = SETTINGS[args.schedule or solver["schedule"]](damping=args.damping)
     grid = load_input(args)
-    with compile_timer() as kernels, compile_timer(loading=False) as compiling:
-        result = preset.refine(grid, schedule=schedule,
-                               max_iter=solver["max_iter"] if args.max_iter is None else args.max_iter,
-                               tol=solver["tol"] if args.tol is None else args.tol,
-                               dtype=np.float32 if args.float32 else np.dtype(solver["dtype"]).type)
+    max_iter = solver["max_iter"] if args.max_iter is None else args.max_iter
+    bar, on_pass = progress.bar(max_iter, desc=f"LBP on {args.input}", disable=not (args.progress or sys.stderr.isatty()))
+    try:  # a bar of the iterations; Ctrl-C between two passes ends the run (the command line says nothing was written)
+        with compile_timer() as kernels, compile_timer(loading=False) as compiling, progress.watch(on_pass):
+            result = preset.refine(grid, schedule=schedule, max_iter=max_iter,
+                                   tol=solver["tol"] if args.tol is None else args.tol,
+                                   dtype=np.float32 if args.float32 else np.dtype(solver["dtype"]).type)
+    finally:
+        bar.close()
     nav2_view = save_map_output(result.beliefs, args.output, args)
     print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, LBP {result.seconds:.3f} s"
           f"{kernel_time(kernels.seconds, compiling.seconds)} -> {args.output}: {nav2_view}")

@@ -86,6 +86,11 @@ def _check(args):
             raise InputError("--margin", f"must be -1 or a whole number of cells, got {args.margin}")
     if args.domain is not None and args.backend != "dds":
         raise InputError("--domain", f"applies to the dds backend only (the {args.backend} backend has its own setup)")
+    if args.backend == "dds":  # the middleware's settings, before any work: a bad one is refused in one line
+        from crfmap.ros.dds import dds_configuration, domain_id
+
+        domain_id(args.domain)
+        dds_configuration()
 
 
 def make_backend(name, domain=None):

@@ -64,6 +64,25 @@ def check_output(inputs, output, force=False, option="--force"):
                 raise InputError(output, f"would replace the input file {i} (pass {option} to update it in place)")
 
 
+GRID_SUFFIXES = (".yaml", ".yml", ".npy")
+
+
+def check_grid_output(output):
+    """InputError naming ``output`` unless it names a grid file (map_server ``.yaml``/``.yml`` or ``.npy``), checked
+    before any work: not ``.``, not ``out.npy/`` (which ``Path`` reads as ``out.npy``).
+
+    >>> check_grid_output("out.npy/")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: out.npy/: ends in '/', a folder's name; expected a grid file name (.yaml or .npy)
+    """
+    from crfmap.checks import check_path_arg
+
+    path = check_path_arg(output, "grid file name (.yaml or .npy)", file=True)
+    if not path.name.lower().endswith(GRID_SUFFIXES):
+        raise InputError(output, "the output must end in .yaml/.yml (map_server map) or .npy")
+
+
 def check_output_folder(output):
     """InputError naming ``output`` if it is an existing folder that is neither empty nor a ROS 2 bag."""
     out = Path(output)

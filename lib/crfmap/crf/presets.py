@@ -193,7 +193,26 @@ class Preset:
     gate: EvidenceGate | None = None  # what each cell's own evidence lets nav2 read (crfmap.crf.model.gating)
 
     def __post_init__(self):
+        from crfmap.checks import check_number
+
         object.__setattr__(self, "temperature", _check_temperature(self.temperature))
+        # the model: every field a number of the kind it is read as (refine would take 2.5 cells or True silently)
+        object.__setattr__(self, "hidden", check_table(self.hidden, "hidden"))
+        object.__setattr__(self, "link", check_table(self.link, "link"))
+        object.__setattr__(self, "pairing", check_pairing(self.pairing))
+        if not isinstance(self.scaled, (bool, np.bool_)):
+            raise InputError("scaled", f"must be True or False, got {self.scaled!r}")
+        for name in ("occupied", "free"):
+            pair = getattr(self, name)
+            if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
+                raise InputError(name, f"must be two log-odds (first net count, each further one), got {pair!r}")
+            object.__setattr__(self, name, tuple(check_number(name, v, low=0.0) for v in pair))
+        object.__setattr__(self, "limit", check_number("limit", self.limit, low=0.0))
+        if self.margin is not None and (isinstance(self.margin, (bool, np.bool_))
+                                        or not isinstance(self.margin, (int, np.integer)) or self.margin < 0):
+            raise InputError("margin", f"must be None or a non-negative whole number of cells, got {self.margin!r}")
+        if self.gate is not None and not isinstance(self.gate, EvidenceGate):
+            raise InputError("gate", f"must be None or an EvidenceGate, got {type(self.gate).__name__}")
         if not (isinstance(self.tol, (int, float)) and not isinstance(self.tol, bool) and math.isfinite(self.tol)
                 and self.tol >= 0):
             raise InputError("tol", f"must be a non-negative number, got {self.tol!r}")
@@ -273,9 +292,9 @@ class Preset:
             g = OccupancyGrid(unary)
         own = region = self.region(observed)
         if within is not None:  # only these cells send messages, as infer's region
-            within = np.asarray(within, dtype=bool)
-            if within.shape != g.shape:
-                raise InputError("within", f"shape {within.shape} does not match the grid's {g.shape}")
+            from crfmap.checks import check_mask
+
+            within = check_mask("within", within, g.shape)
             region = within if own is None else own & within
         for key, value in self.solver().items():
             options.setdefault(key, value)

@@ -13,6 +13,7 @@ import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.frames import quaternion_to_yaw, yaw_to_quaternion
+from crfmap.grid import MAX_EXTENT_M
 
 T_SCAN = "sensor_msgs/msg/LaserScan"
 T_ODOM = "nav_msgs/msg/Odometry"
@@ -30,13 +31,17 @@ TRUTH_TOPIC, MAP_TOPIC = "/ground_truth_pose", "/map"
 
 # --- values out of messages ---------------------------------------------------------------
 def pose_of(msg_pose, source="pose"):
-    """(x, y, yaw) of a geometry_msgs Pose or Transform; InputError naming ``source`` for a non-finite
-    position or a quaternion that is not a rotation (see :func:`crfmap.frames.quaternion_to_yaw`)."""
+    """(x, y, yaw) of a geometry_msgs Pose or Transform; InputError naming ``source`` for a position that is not
+    finite or lies beyond :data:`crfmap.grid.MAX_EXTENT_M` (no map reaches there: a grid around it would be refused
+    later, naming no message), or a quaternion that is not a rotation (see :func:`crfmap.frames.quaternion_to_yaw`)."""
     p = getattr(msg_pose, "position", None) or getattr(msg_pose, "translation")
     q = getattr(msg_pose, "orientation", None) or getattr(msg_pose, "rotation")
     x, y = float(p.x), float(p.y)
     if not (math.isfinite(x) and math.isfinite(y)):
         raise InputError(source, f"position ({x:g}, {y:g}) is not finite")
+    if max(abs(x), abs(y)) > MAX_EXTENT_M:
+        raise InputError(source, f"position ({x:g}, {y:g}) lies beyond {MAX_EXTENT_M:g} m: a unit mistake or a "
+                                 "corrupt field?")
     return (x, y, quaternion_to_yaw(q, source))
 
 

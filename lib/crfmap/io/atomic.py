@@ -83,6 +83,32 @@ def _signals_deferred():
                 os.kill(os.getpid(), pending[0])
 
 
+_RECORDERS = []  # lists that record_written() blocks collect each completed write's targets in
+
+
+@contextlib.contextmanager
+def record_written():
+    """Inside the block, the list yielded collects the targets of every write completed by this module (files of
+    :func:`atomic_paths`, folders of :func:`atomic_dir`), so that a failure after them can say what was written.
+
+    >>> with record_written() as written:
+    ...     pass
+    >>> written
+    []
+    """
+    written = []
+    _RECORDERS.append(written)
+    try:
+        yield written
+    finally:
+        _RECORDERS.remove(written)
+
+
+def _completed(*paths):
+    for written in _RECORDERS:
+        written.extend(Path(p) for p in paths)
+
+
 def _named(exc, path):
     """A write failure as an OSError naming ``path`` (a failed write(2) or a storage library names no file)."""
     import sqlite3
@@ -151,6 +177,7 @@ def atomic_paths(*paths):
             with unit_lock(paths[0].parent, exclusive=True):
                 for tmp, path in zip(tmps, paths):
                     os.replace(tmp, path)
+            _completed(*paths)
         except BaseException as exc:
             for tmp in tmps:
                 with contextlib.suppress(FileNotFoundError):
@@ -216,6 +243,7 @@ def atomic_dir(path):
                         raise
                 else:
                     os.replace(tmp, path)
+            _completed(path)
         except BaseException as exc:
             named = _named(exc, path)
             if named is not None:

@@ -28,6 +28,7 @@ from crfmap.io._rosmsgs import (CMD_VEL_TOPIC, MAP_TOPIC, ODOM_TOPIC, SCAN_TOPIC
                        T_TWIST, TF_STATIC_TOPIC, TF_TOPIC, TF_TYPES, TRUTH_TOPIC, grid_from_message, pose_of,
                        to_seconds, typestore)
 from crfmap.checks import check_input_file, check_path_arg
+from crfmap.io.rosbag1_files import BAG_MAGIC, check_records
 from crfmap.errors import InputError
 from crfmap.frames import TfTree, compose, interpolate_poses
 from crfmap.recording import Recording, ScanSet, Trajectory
@@ -50,6 +51,11 @@ def _bag_location(path: Path):
         return path, "ros2"
     if path.suffix == ".bag":
         check_input_file(path, "ROS1 bag file")  # a FIFO would block the reader
+        if _starts_with(path, BAG_MAGIC):  # its records within the file, its chunks' sizes true (else rosbags says)
+            try:
+                check_records(path)
+            except InputError as exc:
+                raise InputError(path, f"cannot read the bag: {exc.problem}") from None
         return path, "ros1"
     if path.name == "metadata.yaml" or path.suffix in (".db3", ".mcap"):
         if (path.parent / "metadata.yaml").exists():
@@ -59,6 +65,11 @@ def _bag_location(path: Path):
             return path, "ros2"
         raise InputError(path, "no metadata.yaml beside it: not part of a ROS2 bag folder")
     raise InputError(path, "not a ROS bag (expected a ROS1 .bag file or a ROS2 bag folder)")
+
+
+def _starts_with(path, magic: bytes) -> bool:
+    with open(path, "rb") as f:
+        return f.read(len(magic)) == magic
 
 
 def _check_metadata(path, metadata):
@@ -86,6 +97,27 @@ def _reader_errors():
     # What a damaged bag makes rosbags (or the libraries under it) raise.
     return (AnyReaderError, Reader1Error, Reader2Error, SerdeError, sqlite3.Error, OSError, EOFError,
             struct.error, zlib.error, ValueError, KeyError, IndexError)
+
+
+READER_MODULES = ("rosbags", "backports", "compression", "lz4")  # rosbags and its decompressors (zstd, lz4)
+
+
+def raised_by_reader(exc: BaseException) -> bool:
+    """Whether ``exc`` (an Exception) came out of the bag-reading libraries: its innermost Python frame is theirs.
+
+    A bag they cannot decode makes them raise what no list names: ``ZstdError`` for a metadata.yaml claiming
+    zstd on an uncompressed bag, ``TypeError`` from ``ord()`` for an ``.mcap`` of its magic bytes alone. Those
+    are the bag's fault; the same exception from crfmap's own code is not, and stays a traceback.
+
+    >>> raised_by_reader(ValueError("x"))  # never raised: no frame at all
+    False
+    """
+    if not isinstance(exc, Exception):
+        return False
+    tb, last = exc.__traceback__, None
+    while tb is not None:
+        tb, last = tb.tb_next, tb
+    return last is not None and last.tb_frame.f_globals.get("__name__", "").split(".")[0] in READER_MODULES
 
 
 class _Collected:
@@ -209,7 +241,9 @@ def _collect(path, location, scan_topic):
                     c.cmd.append((stamp, float(msg.linear.x), float(msg.angular.z)))
     except InputError:
         raise
-    except errors as exc:
+    except Exception as exc:
+        if not (isinstance(exc, errors) or raised_by_reader(exc)):
+            raise
         raise InputError(path, f"cannot read the bag, corrupt or truncated? ({type(exc).__name__}: {exc})") from None
     c.scan_topic = scan_topic
     return c

@@ -196,7 +196,7 @@ def read_carmen(path, max_range="auto", no_return=_UNSET, warn=True) -> Recordin
     >>> rec.scans.ranges.shape  # doctest: +SKIP
     (910, 180)
     """
-    path = check_path_arg(path, "CARMEN log file name")
+    path = check_path_arg(path, "CARMEN log file name", file=True)
     text = _read_text(path)
     laser_rows, laser_lines = [], []
     odom_rows, odom_lines = [], []

@@ -29,7 +29,7 @@ def load_grid(path, *, free_thresh=None, occupied_thresh=None, loader=None) -> O
     map YAML (default: the current nav2). A grid reaching beyond
     :data:`crfmap.checks.MAX_EXTENT_M` metres (resolution 1e308, say) is refused.
     """
-    path = check_path_arg(path, "grid file name (.yaml or .npy)")
+    path = check_path_arg(path, "grid file name (.yaml or .npy)", file=True)
     kind = _kind(path)
     if kind != "map" and (free_thresh is not None or occupied_thresh is not None):
         raise InputError("--free-thresh/--occupied-thresh" if free_thresh is not None else "--occupied-thresh",
@@ -46,7 +46,7 @@ def load_grid(path, *, free_thresh=None, occupied_thresh=None, loader=None) -> O
 
 def save_grid(grid: OccupancyGrid, path, **options):
     """Save a grid by suffix: ``.yaml``/``.yml`` -> :func:`save_map` (``options`` go there), ``.npy`` -> :func:`save_npy`."""
-    path = check_path_arg(path, "grid file name (.yaml or .npy)")
+    path = check_path_arg(path, "grid file name (.yaml or .npy)", file=True)
     if not isinstance(grid, OccupancyGrid):
         raise InputError(path, f"expected an OccupancyGrid to save, got {type(grid).__name__}")
     if path.suffix.lower() in MAP_SUFFIXES:

@@ -81,7 +81,7 @@ def read_map_yaml(yaml_path) -> dict:
     >>> read_map_yaml("map.yaml")["resolution"]  # doctest: +SKIP
     0.05
     """
-    path = check_path_arg(yaml_path, "map YAML file name")
+    path = check_path_arg(yaml_path, "map YAML file name", file=True)
     doc = read_mapping(path, "map YAML file")
     for key in _REQUIRED_KEYS:
         if key not in doc:
@@ -185,7 +185,7 @@ def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAUL
         raise InputError("--loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
     occ_t = _optional_thresh("occupied_thresh", occupied_thresh)
     free_t = _optional_thresh("free_thresh", free_thresh)
-    path = check_path_arg(yaml_path, "map YAML file name")
+    path = check_path_arg(yaml_path, "map YAML file name", file=True)
     with unit_lock(path.parent, exclusive=False):  # the YAML and the image of one save_map
         params = read_map_yaml(path)
         pixels = read_pixels(params["image_path"], f" (the image of {path})", _check_image_header)

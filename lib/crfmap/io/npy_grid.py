@@ -45,7 +45,7 @@ def save_npy(grid: OccupancyGrid, path) -> Path:
     >>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
     PosixPath('g.npy')
     """
-    path = check_path_arg(path, "file name ending in .npy")
+    path = check_path_arg(path, "file name ending in .npy", file=True)
     if path.suffix.lower() != ".npy":
         raise InputError(path, "an .npy grid file must end in .npy")
     if not isinstance(grid, OccupancyGrid):
@@ -88,7 +88,7 @@ def load_npy(path) -> OccupancyGrid:
     >>> load_npy("g.npy").shape  # doctest: +SKIP
     (2, 3)
     """
-    path = check_input_file(check_path_arg(path), ".npy grid file")
+    path = check_input_file(check_path_arg(path, file=True), ".npy grid file")
     sidecar = npy_sidecar_path(path)
     with unit_lock(path.parent, exclusive=False):  # the array and its sidecar of one save_npy
         with open(path, "rb") as f:

@@ -41,6 +41,67 @@ def parse_header_fields(header: bytes) -> dict:
     return fields
 
 
+OP_CHUNK = 0x05
+CHUNK_COMPRESSIONS = ("none", "bz2", "lz4")  # what rosbag writes (and rosbags reads)
+MAX_CHUNK_EXPANSION = 1000  # a compressed chunk's stated size over its stored size: laser logs compress by < 10
+
+
+def check_records(path, file_size=None):
+    """Walk a ROS 1 bag's top-level records (headers only); InputError naming ``path`` for one that lies.
+
+    Every record's header and data must lie within the file (bounded by its size, before anything is
+    allocated for them); a chunk's ``compression`` must be one rosbag writes and its ``size`` (the
+    uncompressed bytes) equal to its stored bytes when uncompressed, at most :data:`MAX_CHUNK_EXPANSION` times
+    them when compressed: a size of 0xFFFFFFFF on a 7 kB chunk was read as if true.
+    """
+    from crfmap.errors import InputError
+
+    with open(path, "rb") as f:
+        size = file_size if file_size is not None else f.seek(0, 2)
+        f.seek(len(BAG_MAGIC))
+        pos = len(BAG_MAGIC)
+        while pos < size:
+            lengths = f.read(4)
+            if len(lengths) < 4:
+                raise InputError(path, f"record at byte {pos}: cut off (truncated bag?)")
+            (header_length,) = struct.unpack("<I", lengths)
+            if pos + 8 + header_length > size:
+                raise InputError(path, f"record at byte {pos}: a header of {header_length} bytes reaches past the "
+                                       f"end of the file ({size} bytes): truncated or corrupt")
+            header = f.read(header_length)
+            (data_length,) = struct.unpack("<I", f.read(4))
+            end = pos + 8 + header_length + data_length
+            if end > size:
+                raise InputError(path, f"record at byte {pos}: {data_length} bytes of data reach past the end of the "
+                                       f"file ({size} bytes): truncated or corrupt")
+            try:
+                fields = parse_header_fields(header)
+            except (struct.error, UnicodeDecodeError):
+                raise InputError(path, f"record at byte {pos}: unreadable header fields") from None
+            if fields.get("op") == bytes([OP_CHUNK]):
+                _check_chunk(path, pos, fields, data_length)
+            f.seek(end)
+            pos = end
+
+
+def _check_chunk(path, pos, fields, data_length):
+    from crfmap.errors import InputError
+
+    compression = fields.get("compression", b"").decode("ascii", "replace")
+    if compression not in CHUNK_COMPRESSIONS:
+        raise InputError(path, f"chunk at byte {pos}: unknown compression {compression!r} "
+                               f"(rosbag writes {', '.join(CHUNK_COMPRESSIONS)})")
+    raw = fields.get("size", b"")
+    if len(raw) != 4:
+        raise InputError(path, f"chunk at byte {pos}: no 4-byte size field")
+    (stated,) = struct.unpack("<I", raw)
+    if compression == "none" and stated != data_length:
+        raise InputError(path, f"chunk at byte {pos}: states {stated} bytes but stores {data_length} uncompressed")
+    if compression != "none" and stated > MAX_CHUNK_EXPANSION * max(data_length, 1):
+        raise InputError(path, f"chunk at byte {pos}: states {stated} bytes, over {MAX_CHUNK_EXPANSION} times the "
+                               f"{data_length} {compression} bytes it stores: a corrupt size field")
+
+
 class Rosbag1Writer(Writer):
     """rosbags' ROS 1 Writer with rosbag's bag-header record (see the module notes)."""
 

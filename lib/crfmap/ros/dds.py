@@ -20,7 +20,9 @@ DDS endpoints) but not a node name.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 
 from crfmap.errors import InputError
 from crfmap.ros import qos as ros_qos
@@ -42,6 +44,76 @@ def domain_id(value=None) -> int:
     if not 0 <= number <= 232:
         raise InputError("ROS_DOMAIN_ID" if value is None else "--domain", f"must be in 0..232, got {number}")
     return number
+
+
+def dds_configuration(value=None) -> str | None:
+    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``) names, checked: None when unset or
+    empty (Cyclone's defaults).
+
+    Cyclone reads a comma-separated list of files (``file://`` or plain paths) and inline XML (``<...>``) from it;
+    a file that is missing or unreadable, or text that is neither, would only fail (``DDSException``, no reason
+    given) when the participant is made. InputError naming ``CYCLONEDDS_URI`` instead, before any work.
+
+    >>> dds_configuration("<CycloneDDS/>")
+    '<CycloneDDS/>'
+    >>> dds_configuration("/no/such/cyclonedds.xml")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: CYCLONEDDS_URI: names /no/such/cyclonedds.xml, which is not a readable file (No such file or directory)
+    """
+    raw = os.environ.get("CYCLONEDDS_URI") if value is None else value
+    if raw is None:
+        return None
+    if not raw.strip():
+        return None  # Cyclone reads an empty one as unset
+    for item in (part.strip() for part in raw.split(",")):
+        if not item or item.startswith("<"):
+            continue  # inline XML: Cyclone parses it (a parse error is caught where the participant is made)
+        path = item[len("file://"):] if item.startswith("file://") else item
+        if "://" in path:
+            raise InputError("CYCLONEDDS_URI", f"{item!r} is neither a file nor inline XML (<CycloneDDS>...)")
+        try:
+            with open(path, "rb") as f:
+                f.read(1)
+        except OSError as exc:
+            raise InputError("CYCLONEDDS_URI", f"names {path}, which is not a readable file ({exc.strerror or exc})"
+                             ) from None
+    return raw
+
+
+@contextlib.contextmanager
+def _c_stderr():
+    """Inside the block, what C code writes to file descriptor 2 goes to a temporary file; ``.text`` after it."""
+    import tempfile
+    from types import SimpleNamespace
+
+    said = SimpleNamespace(text="")
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with tempfile.TemporaryFile() as f:
+            os.dup2(f.fileno(), 2)
+            try:
+                yield said
+            finally:
+                os.dup2(saved, 2)
+                f.seek(0)
+                said.text = f.read(65536).decode("utf-8", "replace")
+    finally:
+        os.close(saved)
+
+
+def _last_message(text: str) -> str:
+    """Cyclone's last log line without its time stamp and thread name.
+
+    >>> _last_message("1796408090.326618 [0]     python: nosuch0: does not match an available interface.\\n")
+    'nosuch0: does not match an available interface.'
+    """
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    if not lines:
+        return ""
+    head, _, rest = lines[-1].partition("]")
+    return rest.split(":", 1)[1].strip() if rest and ":" in rest else lines[-1]
 
 
 def dds_qos(profile: ros_qos.Profile, reader=False):
@@ -100,7 +172,21 @@ class DdsBackend:
             from cyclonedds.domain import DomainParticipant
         except ImportError:
             raise InputError("--backend dds", "needs the cyclonedds package (pip install 'crfmap[ros]')") from None
-        self.participant = DomainParticipant(domain_id(domain))
+        from cyclonedds.core import DDSException
+
+        number = domain_id(domain)
+        configuration = dds_configuration()
+        with _c_stderr() as said:  # Cyclone prints its reason for a refused configuration on stderr
+            try:
+                self.participant = DomainParticipant(number)
+            except DDSException:
+                self.participant = None
+        if self.participant is None:  # the reason in the one error line, not a second line above it
+            what = "CYCLONEDDS_URI" if configuration else ("ROS_DOMAIN_ID" if domain is None else "--domain")
+            reason = _last_message(said.text) or f"no DDS participant could be made on domain {number}"
+            raise InputError(what, f"Cyclone DDS refused it: {reason}")
+        if said.text:  # warnings of a participant that works: the user's to see
+            sys.stderr.write(said.text)
         self.waitset = WaitSet(self.participant)
         self.readers = []  # (reader, callback, batch)
         self.topics = {}  # reader -> ROS topic, for lost()

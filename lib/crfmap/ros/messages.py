@@ -30,6 +30,7 @@ import numpy as np
 from crfmap.io.nav2_values import occupancy_values
 from crfmap.errors import InputError
 from crfmap.frames import quaternion_to_yaw, yaw_to_quaternion
+from crfmap.grid import MAX_EXTENT_M
 
 ANGLE_TOLERANCE = 1e-4  # [rad] float32 scan angles differing by less than this agree (as crfmap.io.bag_reader)
 
@@ -135,8 +136,8 @@ def scan_message(msg) -> ScanMessage:
 def transforms_of(msg):
     """The transforms of a tf2_msgs/TFMessage (any middleware), and the faults found.
 
-    Returns ``(transforms, faults)``: a transform with a non-finite translation or a
-    quaternion that is not a rotation is left out and listed in ``faults`` as a
+    Returns ``(transforms, faults)``: a transform with a translation that is not finite or lies beyond
+    :data:`crfmap.grid.MAX_EXTENT_M`, or a quaternion that is not a rotation is left out and listed in ``faults`` as a
     :class:`BadMessage`, so the good transforms of the same message still count.
     """
     out, faults = [], []
@@ -146,6 +147,10 @@ def transforms_of(msg):
         x, y = float(t.x), float(t.y)
         if not (math.isfinite(x) and math.isfinite(y)):
             faults.append(BadMessage("transform translation", f"{parent} -> {child}: ({x:g}, {y:g}) is not finite"))
+            continue
+        if max(abs(x), abs(y)) > MAX_EXTENT_M:  # as a bag's /tf (crfmap.io._rosmsgs.pose_of): a corrupt field
+            faults.append(BadMessage("transform translation", f"{parent} -> {child}: ({x:g}, {y:g}) lies beyond "
+                                                              f"{MAX_EXTENT_M:g} m"))
             continue
         try:
             yaw = quaternion_to_yaw(q, f"{parent} -> {child}")

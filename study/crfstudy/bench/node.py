@@ -7,6 +7,8 @@
 - ``node-map-olin``: the map mode's core (:class:`crfmap.ros.node.MapNode`, no middleware) fed
   the Olin bag's tf and scans as fast as it takes them: scans per second it sustains, against
   the bag's own scan rate.
+- ``memory-infer-default`` / ``memory-node-refine``: peak memory a cell of one map refined with the default preset,
+  as ``crfmap infer`` and as the refine node do it (:func:`bench_node_memory`), printed side by side.
 """
 from __future__ import annotations
 
@@ -172,3 +174,81 @@ def bench_node_map(quick=False):
                    scans_per_second=scans / seconds, bag_scans_per_second=bag_rate,
                    beams=int(len(messages and next(m for t, m in messages if t == "/scan").ranges)),
                    note="MapNode core fed the bag's tf and scans (no middleware), OnlineMapper radius 4 m, margin 3")]
+
+
+_PEAK = (
+    "import numpy as np\n"
+    "def status(key):\n"
+    "    for line in open('/proc/self/status'):\n"
+    "        if line.startswith(key):\n"
+    "            return int(line.split()[1]) * 1024\n"
+    "def peak_since(base):\n"
+    "    return status('VmHWM') - base\n"
+    "def reset():\n"
+    "    open('/proc/self/clear_refs', 'w').write('5')\n"
+    "    return status('VmRSS')\n"
+    "def building(n):  # a map-like grid: free space, walls, unknown, as P in [0, 1]\n"
+    "    rng = np.random.default_rng(0)\n"
+    "    p = np.full((n, n), 0.5)\n"
+    "    p[n // 8: -n // 8, n // 8: -n // 8] = 0.1\n"
+    "    p[::40, :] = 0.9\n"
+    "    p[:, ::40] = 0.9\n"
+    "    return np.where(rng.random((n, n)) < 0.02, 0.5, p)\n"
+)
+
+_INFER = _PEAK + (
+    "from crfmap.crf.presets import get_preset\n"
+    "from crfmap.grid import OccupancyGrid\n"
+    "get_preset().refine(building(64))  # kernels loaded\n"
+    "grid = OccupancyGrid(building({n}), 0.05)  # what load_grid gives crfmap infer\n"
+    "base = reset()\n"
+    "beliefs = get_preset().refine(grid).beliefs  # crfmap infer's work, default preset\n"
+    "beliefs.to_int8()  # what the trinary map_server output is made of\n"
+    "print(peak_since(base))\n"
+)
+
+_NODE = _PEAK + (
+    "from types import SimpleNamespace as NS\n"
+    "from crfmap.grid import OccupancyGrid\n"
+    "from crfmap.ros.dds import native_message\n"
+    "from crfmap.ros.messages import grid_out\n"
+    "from crfmap.ros.node import RefineNode\n"
+    "def native(n):  # the sample as Cyclone DDS hands it over: data a Python list of ints\n"
+    "    msg = grid_out(OccupancyGrid(building(n), 0.05), 1, 'map')\n"
+    "    stamp = NS(sec=0, nanosec=1)\n"
+    "    o = NS(position=NS(x=0.0, y=0.0, z=0.0), orientation=NS(x=0.0, y=0.0, z=0.0, w=1.0))\n"
+    "    info = NS(map_load_time=stamp, resolution=0.05, width=n, height=n, origin=o)\n"
+    "    return NS(header=NS(stamp=stamp, frame_id='map'), info=info, data=msg.data.tolist())\n"
+    "def serialise(msg):  # what the dds backend's publisher does with the refined map\n"
+    "    native_message('grid', msg).serialize()\n"
+    "node = RefineNode(period=0.0, log=lambda text: None)\n"
+    "node.publishers = {{'output': serialise}}\n"
+    "node.on_grid(native(64)); node.step(1e18)  # kernels loaded (now: after any period)\n"
+    "sample = native({n})\n"
+    "base = reset()\n"
+    "node.on_grid(sample)\n"
+    "del sample\n"
+    "node.step(1e18)\n"
+    "print(peak_since(base))\n"
+)
+
+
+def bench_node_memory(size=4096):
+    """Rows ``memory-infer-default`` and ``memory-node-refine``: peak memory per cell of refining one ``size``² map
+    with the default preset as ``crfmap infer`` does (beyond its float64 input) and as ``crfmap node refine`` does
+    (beyond the received sample, a Python list of ints as Cyclone DDS delivers it; converting, refining, the
+    int8 output and the outgoing sample serialised). Each in a child process (Linux: /proc's high-water mark)."""
+    rows = []
+    for name, code, note in (
+            ("memory-infer-default", _INFER, "peak beyond the float64 input: the default preset's refine and the "
+                                             "int8 output (crfmap infer's work)"),
+            ("memory-node-refine", _NODE, "peak beyond the received DDS sample (a Python list, 8 B a cell): "
+                                          "message -> grid -> refine -> int8 -> outgoing sample serialised")):
+        out = subprocess.run([sys.executable, "-c", code.format(n=int(size))], capture_output=True, text=True)
+        if out.returncode != 0:
+            rows.append(record(name, size, np.float64, 1, None, note=f"failed: {out.stderr.strip()[-300:]}"))
+            continue
+        peak = int(out.stdout.strip().splitlines()[-1])
+        rows.append(record(name, size, np.float64, 1, None, peak_bytes=peak, bytes_per_cell=peak / size**2,
+                           note=note))
+    return rows

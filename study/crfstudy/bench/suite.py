@@ -346,10 +346,11 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
             if peers:
                 yield from bench_peers(quick=quick)
         elif kind == "node":
-            from crfstudy.bench.node import bench_node_map, bench_node_refine
+            from crfstudy.bench.node import bench_node_map, bench_node_memory, bench_node_refine
 
             yield from bench_node_refine(quick=quick)
             yield from bench_node_map(quick=quick)
+            yield from bench_node_memory(1024 if quick else 4096)  # the node's bytes a cell beside crfmap infer's
         elif kind == "closed-loop":
             from crfstudy.bench.closed_loop import bench_closed_loop
 

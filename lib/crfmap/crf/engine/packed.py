@@ -24,6 +24,7 @@ from crfmap.crf.engine._layout import (
     _unpack_messages,
 )
 from crfmap.crf.engine._message_update import NO_MASK, _pass, _tile_max
+from crfmap.crf.engine.progress import passed
 from crfmap.crf.threads import over_rows, run_all
 
 PASS_ITERATIONS = 16  # iterations per pass at most (temporal blocking depth): the message change is measured
@@ -370,6 +371,7 @@ class PackedBlock:
             change, per_tile = self._pass_change(cb, True, sparse)
             confirm = False
             changes.extend([float("nan")] * (n - 1) + [change])
+            passed(len(changes), max_iter, change)  # a watcher's bar (crfmap infer on a terminal); Ctrl-C lands here
             whole_grid = active is None
             measured.append((len(changes), change))
             halves -= 1

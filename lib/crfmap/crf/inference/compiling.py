@@ -66,8 +66,9 @@ def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fu
     if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
         return False  # uncompiled: say it once per process, not on every call
     if fast:  # the kernels every such call runs
-        kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._tile_max)
-        kernels += (F._pass,)
+        kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._pass)
+        if cells >= P.SPARSE_CELLS:  # only such grids measure changes tile by tile: a smaller one never compiles it
+            kernels += (F._tile_max,)
     else:
         kernels = plain_kernels(schedule) + (M._beliefs,)
     said = announce(*kernels)

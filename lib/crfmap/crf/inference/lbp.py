@@ -42,6 +42,7 @@ from crfmap.crf.model.potentials import (
     DEFAULT_LINK,
     check_pairing,
     check_table,
+    check_table_fits,
     directional_tables,
     message_coefficients,
 )
@@ -148,6 +149,8 @@ def infer(
     link = check_table(link, "link")
     pairing = check_pairing(pairing)
     dtype = check_float_dtype(dtype)
+    hidden = check_table_fits(hidden, dtype, "hidden")  # in the dtype the kernels compute in
+    link = check_table_fits(link, dtype, "link")
     if isinstance(max_iter, (bool, np.bool_)) or not (isinstance(max_iter, (int, np.integer)) and max_iter >= 0):
         raise InputError("max_iter", f"must be a non-negative integer, got {max_iter!r}")
     tol = check_number("tol", tol, low=0.0)
@@ -183,10 +186,9 @@ def infer(
         messages = check_messages(messages, shape)
     active = None
     if region is not None:
-        active = np.asarray(region)
-        if active.shape != shape:
-            raise InputError("region", f"mask shape {active.shape} does not match the grid {shape}")
-        active = active.astype(np.bool_, copy=False)
+        from crfmap.checks import check_mask
+
+        active = check_mask("region", region, shape)
     # hard evidence: certain cells are clamped (never updated, sending what their state implies)
     states = None if fused else certain_states(g.probability, link, tables, active)  # fused: found while packing
     sending = states if max_iter else None  # clamped cells send from the first iteration on

@@ -46,9 +46,9 @@ def near_cells(mask, margin: int) -> np.ndarray:
     """
     if not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool) and margin >= 0):
         raise InputError("margin", f"must be a non-negative whole number of cells, got {margin!r}")
-    mask = np.asarray(mask, dtype=bool)
-    if mask.ndim != 2:
-        raise InputError("mask", f"expected a 2-D [y, x] mask, got shape {mask.shape}")
+    from crfmap.checks import check_mask
+
+    mask = check_mask("mask", mask)
     # a separable max-filter: dilate rows, then columns, by margin cells
     for axis in (0, 1):
         out = mask.copy()

@@ -27,6 +27,7 @@ import numpy as np
 
 from crfmap.checks import check_settings
 from crfmap.crf.engine.messages import beliefs_from_messages, floored, initial_messages
+from crfmap.crf.engine.progress import passed
 from crfmap.crf.inference import _plain_kernels as K
 from crfmap.crf.model.evidence import clamp_messages
 from crfmap.crf.model.potentials import link_unary, message_coefficients
@@ -252,6 +253,7 @@ def run_schedule(settings, probability, tables, link, max_iter, tol, senders, me
     for _ in range(max_iter):
         c = iteration(settings, run)
         changes.append(float(c))
+        passed(len(changes), max_iter, c)  # a watcher's bar (crfmap.crf.engine.progress)
         if c < tol:
             break
     return beliefs_from_messages(unary, msg), msg, changes

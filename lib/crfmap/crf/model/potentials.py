@@ -76,6 +76,28 @@ def check_table(table, name="potential") -> np.ndarray:
     return arr
 
 
+TABLE_HEADROOM = 16  # a table entry times the messages it meets: entries stay this far below the dtype's largest
+
+
+def check_table_fits(table, dtype, name="potential") -> np.ndarray:
+    """``table`` (checked) if every non-zero entry survives ``dtype``: between its smallest normal number and
+    its largest over :data:`TABLE_HEADROOM`. A float32 entry of 1e39 is inf there, and the kernels' beliefs NaN.
+
+    >>> check_table_fits([[1e39, 1], [1, 1]], np.float32, "hidden")
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: hidden: entries [[1e+39, 1.0], [1.0, 1.0]] do not fit float32 (1.2e-38 .. 2.1e+37); rescale the table or compute in float64
+    """
+    values = check_table(table, name)
+    info = np.finfo(dtype)
+    positive = values[values > 0]
+    if positive.max() > info.max / TABLE_HEADROOM or positive.min() < info.tiny:
+        advice = "; rescale the table" + (" or compute in float64" if info.dtype == np.float32 else "")
+        raise InputError(name, f"entries {values.tolist()} do not fit {info.dtype} ({info.tiny:.1e} .. "
+                               f"{info.max / TABLE_HEADROOM:.1e}){advice}")
+    return values
+
+
 def check_pairing(pairing) -> str:
     if pairing not in PAIRINGS:
         raise InputError("pairing", f"must be one of {', '.join(PAIRINGS)}, got {pairing!r}")
