@@ -228,9 +228,14 @@ def test_two_simulations_into_one_new_folder_leave_one_whole_bag(tmp_path):
     argv = [sys.executable, "-c", code, "simulate", "x", str(tmp_path / "sim"), "--quiet", "--beams", "8"]
     runs = [subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) for _ in range(2)]
     results = [(p.wait(), p.stderr.read()) for p in runs]
-    assert sorted(rc for rc, _ in results) == [0, 2]  # one wrote its bag, the other refused in one line
-    err = next(e for rc, e in results if rc == 2).strip()
-    assert len(err.splitlines()) == 1 and "sim" in err and ("another process" in err or "already exists" in err)
+    codes = sorted(rc for rc, _ in results)
+    # overlapping: one wrote its bag, the other refused in one line; on a busy machine the second may start after
+    # the first finished, and then replaces a finished bag as any later run may (the race itself is the catalogue's
+    # deterministic case concurrency/..., with a rival writer injected at the rename)
+    assert codes in ([0, 2], [0, 0]), results
+    if codes == [0, 2]:
+        err = next(e for rc, e in results if rc == 2).strip()
+        assert len(err.splitlines()) == 1 and "sim" in err and ("another process" in err or "already exists" in err)
     from crfmap.io.bag_reader import read_bag
 
     assert len(read_bag(tmp_path / "sim").scans) > 0 and not list(tmp_path.glob(".*tmp"))

@@ -230,13 +230,18 @@ def test_the_peers_and_node_rows_can_be_left_out(monkeypatch):
     monkeypatch.setattr(peers, "bench_peers", lambda **kw: [{"method": "peers-stub"}])
     monkeypatch.setattr(node, "bench_node_refine", lambda **kw: [{"method": "node-refine-stub"}])
     monkeypatch.setattr(node, "bench_node_map", lambda **kw: [{"method": "node-map-stub"}])
+    monkeypatch.setattr(node, "bench_node_memory", lambda *a, **kw: [{"method": "node-memory-stub"}])
+    from crfstudy.bench import closed_loop
+
+    monkeypatch.setattr(closed_loop, "bench_closed_loop", lambda **kw: [{"method": "closed-loop-stub"}])
 
     def methods(**flags):
         return {r["method"] for r in bench.run(sizes=(64,), quick=True, repeats=1, threads=(1,), progress=False,
                                                memory=False, external=False, goals=False, cold=False, **flags)}
 
     every = methods()
-    assert {"online-stub", "peers-stub", "node-refine-stub", "node-map-stub", "crfmap-fast"} <= every
+    node_rows = {"node-refine-stub", "node-map-stub", "node-memory-stub"}
+    assert {"online-stub", "peers-stub", "closed-loop-stub", "crfmap-fast"} | node_rows <= every
     fewer = methods(peers=False, node=False)
-    assert "online-stub" in fewer and not {"peers-stub", "node-refine-stub", "node-map-stub"} & fewer
-    assert every - fewer == {"peers-stub", "node-refine-stub", "node-map-stub"}
+    assert {"online-stub", "closed-loop-stub"} <= fewer and not ({"peers-stub"} | node_rows) & fewer
+    assert every - fewer == {"peers-stub"} | node_rows
