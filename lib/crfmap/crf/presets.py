@@ -330,7 +330,9 @@ PRESETS = {
     # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.2 .. 0.5}: J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it
     # converges 2.4x faster than at it for 0.0003 Brier), pi = 0.25 (Intel's isotonic P at x = 0 is 0.248); the gate's
     # free_evidence = 2 is the point of the measured Brier / dangerous-miss curve where no refined free cell is a cell
-    # the raw grid does not call free. `crfmap evaluate` and notebook 10 score it beside certainty on every metric.
+    # the raw grid does not call free. `python -m crfstudy.analysis.gate_search` reruns the J x pi search (cached in
+    # study/crfstudy/analysis/gate_search_intel_aces.json); `crfmap evaluate`, notebook 10 and notebook 12 score it
+    # beside certainty on every metric.
     "gated": Preset(
         "gated", "recommended for navigation: the certainty model at J = 0.30 (below LBP's Bethe point), gated by "
         "each cell's own evidence: free only after two net passes (never a cell the raw grid does not call free), "

@@ -2,6 +2,7 @@
 
 - :mod:`crfstudy.analysis.preset_search`: ``coordinate_search`` (the search that chose the certainty preset, on Intel)
 - :mod:`crfstudy.analysis.coordinate`: ``coordinate_descent``, the search rule of the preset's and the peers' searches
+- :mod:`crfstudy.analysis.gate_search`: the gated preset's J x pi search (``python -m crfstudy.analysis.gate_search``)
 - :mod:`crfstudy.analysis.peer_search`: ``octomap_search``, ``hilbert_coordinate_search`` (the peers' constants, on Intel)
 - :mod:`crfstudy.analysis.ablations`: ``ablation_presets``, ``IsotonicEvidence``, ``PlattRaw``
 - :mod:`crfstudy.analysis.modelspace`: ``symmetric_tables``, ``fit_scaled``, ``scaled_scores``, ``fit_pseudolikelihood``
