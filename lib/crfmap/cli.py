@@ -111,7 +111,7 @@ def main(argv=None) -> int:
     from crfmap import environment
 
     try:  # before the sub-commands import numba, which reads NUMBA_NUM_THREADS once and fails on 0
-        environment.prepare(cache=False)
+        environment.prepare(numba_cache_too=False)
     except CrfmapError as exc:
         return _fail(f"crfmap: error: {exc}")
     parser = build_parser()

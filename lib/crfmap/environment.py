@@ -202,16 +202,16 @@ def reproduce_started() -> float | None:
     return value
 
 
-def check(cache=True) -> None:
+def check(numba_cache_too=True) -> None:
     """Check every variable an entry point depends on before it starts (InputError naming the first bad one).
 
     The same checks as where each is read (:mod:`crfstudy.paths`, :func:`crfmap.checks.max_cells`, ...).
-    ``cache`` False: all but ``NUMBA_CACHE_DIR`` (what reading the command line needs: ``--help`` compiles nothing).
+    ``numba_cache_too`` False: all but ``NUMBA_CACHE_DIR`` (what reading the command line needs: ``--help`` compiles nothing).
 
     >>> check()
     """
     numba_threads()
-    if cache:
+    if numba_cache_too:
         numba_cache_dir()
     number("CRFMAP_MAX_CELLS", "cells")
     run_context()
@@ -221,19 +221,19 @@ def check(cache=True) -> None:
     folder("CRFMAP_DATA")
 
 
-def prepare(cache=True) -> None:
+def prepare(numba_cache_too=True) -> None:
     """Ready this process for crfmap's kernels; the entry points call it first, a library user may (optional).
 
     Checks every variable (:func:`check`) before numba reads ``NUMBA_NUM_THREADS``; where the package's own
     ``__pycache__`` folders are read-only and ``NUMBA_CACHE_DIR`` is unset, points numba at a user cache folder
     (:func:`crfmap._numba_cache.configure`); sets ``OMP_WAIT_POLICY=PASSIVE`` unless set (see above). Importing
-    crfmap does none of this. ``cache`` False leaves the cache folder to :func:`prepare_cache`, called once
+    crfmap does none of this. ``numba_cache_too`` False leaves the cache folder to :func:`prepare_cache`, called once
     the work is known to need kernels (the ``crfmap`` command: after its command line is read, so that ``--help``
     and a usage error work for a user who cannot write the venv's cache).
     """
-    check(cache=False)
+    check(numba_cache_too=False)
     quiet_openmp_threads()
-    if cache:
+    if numba_cache_too:
         prepare_cache()
 
 

@@ -207,7 +207,11 @@ class Preset:
             if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
                 raise InputError(name, f"must be two log-odds (first net count, each further one), got {pair!r}")
             object.__setattr__(self, name, tuple(check_number(name, v, low=0.0) for v in pair))
-        object.__setattr__(self, "limit", check_number("limit", self.limit, low=0.0))
+        limit = self.limit  # inf is a valid limit (no cap on a cell's log-odds: the ablations' J = 0); NaN is not
+        if not (isinstance(limit, (int, float, np.integer, np.floating)) and not isinstance(limit, (bool, np.bool_))
+                and limit == limit and limit >= 0):
+            raise InputError("limit", f"must be a non-negative number (inf: no cap), got {limit!r}")
+        object.__setattr__(self, "limit", float(limit))
         if self.margin is not None and (isinstance(self.margin, (bool, np.bool_))
                                         or not isinstance(self.margin, (int, np.integer)) or self.margin < 0):
             raise InputError("margin", f"must be None or a non-negative whole number of cells, got {self.margin!r}")
