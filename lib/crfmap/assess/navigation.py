@@ -55,6 +55,7 @@ import numpy as np
 from scipy import ndimage
 
 from crfmap.assess.scansplit import (DEFAULT_BLOCK, GROUPS, LOG_FLOOR, ScanSplit, block_resamples, check_probability,
+                                     check_scoring,
                                      percentile_interval, score)
 from crfmap.errors import InputError
 from crfmap.io.nav2_costmap import LETHAL_OBSTACLE, NO_INFORMATION, static_layer_costs
@@ -203,14 +204,7 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
     """
     if not isinstance(split, ScanSplit):
         raise InputError("split", f"expected a ScanSplit, got {type(split).__name__}")
-    if not predictions:
-        raise InputError("predictions", "nothing to score")
-    if reference is not None and reference not in predictions:
-        raise InputError("reference", f"{reference!r} is not one of the predictions")
-    if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 0):
-        raise InputError("n_boot", f"must be a non-negative integer, got {n_boot!r}")
-    if not (isinstance(block, (int, np.integer)) and block >= 1):
-        raise InputError("block", f"must be a positive integer, got {block!r}")
+    check_scoring(predictions, reference, n_boot, block)
     if not (isinstance(cover_radius, (int, float)) and math.isfinite(cover_radius) and cover_radius >= 0):
         raise InputError("cover_radius", f"must be a non-negative distance in metres, got {cover_radius!r}")
     probs = {name: check_probability(p, split.shape, name) for name, p in predictions.items()}

@@ -258,6 +258,18 @@ def check_probability(pred, shape, name) -> np.ndarray:
     return p
 
 
+def check_scoring(predictions: dict, reference, n_boot, block) -> None:
+    """The arguments every paired scoring of a split shares (:func:`score`, the navigation metrics), checked."""
+    if not predictions:
+        raise InputError("predictions", "nothing to score")
+    if reference is not None and reference not in predictions:
+        raise InputError("reference", f"{reference!r} is not one of the predictions")
+    if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 0):
+        raise InputError("n_boot", f"must be a non-negative integer, got {n_boot!r}")
+    if not (isinstance(block, (int, np.integer)) and block >= 1):
+        raise InputError("block", f"must be a positive integer, got {block!r}")
+
+
 def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = DEFAULT_BLOCK, seed: int = 0,
           reference: str | None = None, level: float = 0.95, groups=GROUPS, metrics=METRICS) -> dict:
     """Score predictions ``{name: [y, x] P(occupied)}`` against the second half, with intervals.
@@ -273,14 +285,7 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
     >>> list(s["raw"]), sorted(s["raw"]["all"])
     (['all'], ['brier', 'cells', 'walls'])
     """
-    if not predictions:
-        raise InputError("predictions", "nothing to score")
-    if reference is not None and reference not in predictions:
-        raise InputError("reference", f"{reference!r} is not one of the predictions")
-    if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 0):
-        raise InputError("n_boot", f"must be a non-negative integer, got {n_boot!r}")
-    if not (isinstance(block, (int, np.integer)) and block >= 1):
-        raise InputError("block", f"must be a positive integer, got {block!r}")
+    check_scoring(predictions, reference, n_boot, block)
     unknown = [g for g in groups if g not in GROUPS] + [m for m in metrics if m not in METRICS]
     if unknown or not groups or not metrics:
         raise InputError("groups/metrics", f"must be non-empty subsets of {GROUPS} and {METRICS}, "

@@ -188,6 +188,22 @@ def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_rang
     return occupied, empty
 
 
+def sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_max, frame_id="map"):
+    """A one-scan ScanSet of a laser's geometry at the centre of ``bounds`` (xmin, ymin, xmax, ymax) [m], no readings:
+    what a grid for that sensor is made from before any scan arrives (the online mappers' ``for_sensor``)."""
+    from crfmap.recording import ScanSet
+
+    try:
+        xmin, ymin, xmax, ymax = (float(v) for v in bounds)
+    except (TypeError, ValueError):
+        raise InputError("bounds", f"expected (xmin, ymin, xmax, ymax) in metres, got {bounds!r}") from None
+    if not (isinstance(n_beams, (int, np.integer)) and n_beams >= 1):
+        raise InputError("n_beams", f"must be a positive integer, got {n_beams!r}")
+    centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
+    return ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
+                   range_max, centre, np.zeros(1), frame_id=frame_id, source="sensor")
+
+
 class HitCounter:
     """The hit counts of :func:`count_hits`, filled one scan at a time (online mapping).
 
@@ -232,17 +248,7 @@ class HitCounter:
     def for_sensor(cls, bounds, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
                    free_on_no_return=False, max_range_is_no_return=True, frame_id="map") -> "HitCounter":
         """A counter for a grid over ``bounds`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
-        from crfmap.recording import ScanSet
-
-        try:
-            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            raise InputError("bounds", f"expected (xmin, ymin, xmax, ymax) in metres, got {bounds!r}") from None
-        if not (isinstance(n_beams, (int, np.integer)) and n_beams >= 1):
-            raise InputError("n_beams", f"must be a positive integer, got {n_beams!r}")
-        centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
-        probe = ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
-                        range_max, centre, np.zeros(1), frame_id=frame_id, source="sensor")
+        probe = sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_max, frame_id)
         return cls.for_scans(probe, resolution, bounds, free_on_no_return, max_range_is_no_return)
 
     def add_scan(self, ranges, laser_pose) -> np.ndarray:

@@ -215,18 +215,9 @@ class OctoMapUpdater:
     def for_sensor(cls, bounds, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
                    free_on_no_return=False, max_range_is_no_return=True, **params) -> "OctoMapUpdater":
         """An updater for a grid over ``bounds`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
-        from crfmap.mapping.builder import _geometry
-        from crfmap.recording import ScanSet
+        from crfmap.mapping.builder import _geometry, sensor_probe
 
-        try:
-            xmin, ymin, xmax, ymax = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            raise InputError("bounds", f"expected (xmin, ymin, xmax, ymax) in metres, got {bounds!r}") from None
-        if not (isinstance(n_beams, (int, np.integer)) and n_beams >= 1):
-            raise InputError("n_beams", f"must be a positive integer, got {n_beams!r}")
-        centre = np.array([[(xmin + xmax) / 2, (ymin + ymax) / 2, 0.0]])
-        probe = ScanSet(np.full((1, int(n_beams)), np.nan, np.float32), angle_min, angle_increment, range_min,
-                        range_max, centre, np.zeros(1), source="sensor")
+        probe = sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_max)
         return cls(_geometry(probe, resolution, bounds, free_on_no_return, max_range_is_no_return), **params)
 
     def add_scan(self, ranges, laser_pose) -> None:

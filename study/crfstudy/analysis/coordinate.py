@@ -101,3 +101,23 @@ def coordinate_descent(score, grid: dict, start: dict, order=None, max_rounds: i
     bar.close()
     return SearchResult(best=current, best_brier=float(best), trace=trace, rounds=rounds, converged=converged,
                         grid=grid, start=start)
+
+
+def check_or_write(result: dict, cache, cached: dict | None, label: str, details: str = "") -> int:
+    """The end of a search command: with ``cached`` (``--check``), say whether the rerun ``result`` chose what the
+    cache holds (exit status 0) or not (1); without, write ``result`` to ``cache`` atomically and say so."""
+    import json
+    from pathlib import Path
+
+    from crfmap.io.atomic import atomic_path
+
+    if cached is not None:
+        same = cached["best"] == result["best"] and len(cached["trace"]) == len(result["trace"])
+        print(f"{label} best {result['best']} (Brier {result['best_brier']:.7f}); cache "
+              f"{'agrees' if same else 'DIFFERS: ' + str(cached['best'])}")
+        return 0 if same else 1
+    with atomic_path(cache) as tmp:
+        Path(tmp).write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {cache}: best {result['best']} (Brier {result['best_brier']:.7f}), "
+          f"{result['configurations']} configurations, {result['rounds']} rounds{details}")
+    return 0

@@ -112,10 +112,13 @@ def main(argv=None) -> int:
         same = all(abs(a["weighted_logloss"] - b["weighted_logloss"]) < 1e-9 for a, b in zip(rows, cached["rows"]))
         print("cache agrees" if same and cached["best"] == {"J": chosen["J"], "pi": chosen["pi"]} else "cache DIFFERS")
         return 0 if same else 1
-    CACHE.write_text(json.dumps({"rule": "lowest mean held-out log-loss, occupied cells weighted "
-                                          f"{OCCUPIED_WEIGHT:g}x, over {sorted({k for k in RECORDINGS})} x "
-                                          "(scan, temporal, blocks)",
-                                 "best": {"J": chosen["J"], "pi": chosen["pi"]}, "rows": rows}, indent=1) + "\n")
+    from crfmap.io.atomic import atomic_path
+
+    with atomic_path(CACHE) as tmp:  # a search interrupted or a full disk leaves the old cache whole
+        Path(tmp).write_text(json.dumps({"rule": "lowest mean held-out log-loss, occupied cells weighted "
+                                                 f"{OCCUPIED_WEIGHT:g}x, over {sorted(RECORDINGS)} x (scan, temporal, "
+                                                 "blocks)", "best": {"J": chosen["J"], "pi": chosen["pi"]},
+                                         "rows": rows}, indent=1) + "\n")
     print(f"written {CACHE}")
     return 0
 

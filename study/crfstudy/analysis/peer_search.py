@@ -193,7 +193,7 @@ def run_training_search(peer: str, progress: bool = True) -> dict:
 
 def main(argv=None) -> int:
     """``python -m crfstudy.analysis.peer_search octomap|hilbert [--check]``: rerun one search, (re)write or check its cache."""
-    from crfmap.io.atomic import atomic_path
+    from crfstudy.analysis.coordinate import check_or_write
 
     argv = sys.argv[1:] if argv is None else list(argv)
     if not (1 <= len(argv) <= 2 and argv[0] in SEARCHES and argv[1:] in ([], ["--check"])):
@@ -205,17 +205,8 @@ def main(argv=None) -> int:
     except InputError as e:  # the data missing included
         print(f"crfmap peer search: {e}", file=sys.stderr)
         return 2
-    if argv[1:] == ["--check"]:
-        cached = load_cached(peer)
-        same = cached["best"] == result["best"] and len(cached["trace"]) == len(result["trace"])
-        print(f"{peer} search best {result['best']} (Brier {result['best_brier']:.7f}); cache "
-              f"{'agrees' if same else 'DIFFERS: ' + str(cached['best'])}")
-        return 0 if same else 1
-    with atomic_path(CACHES[peer]) as tmp:
-        Path(tmp).write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
-    print(f"wrote {CACHES[peer]}: best {result['best']} (Brier {result['best_brier']:.7f}), "
-          f"{result['configurations']} configurations, {result['rounds']} rounds, interior {result['interior']}")
-    return 0
+    return check_or_write(result, CACHES[peer], load_cached(peer) if argv[1:] == ["--check"] else None,
+                          f"{peer} search", f", interior {result['interior']}")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -138,7 +138,7 @@ def run_training_search(progress: bool = True) -> dict:
 
 def main(argv=None) -> int:
     """``python -m crfstudy.analysis.preset_search [--check]``: rerun the search on Intel and (re)write or check the cache."""
-    from crfmap.io.atomic import atomic_path
+    from crfstudy.analysis.coordinate import check_or_write
 
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv not in ([], ["--check"]):
@@ -149,17 +149,7 @@ def main(argv=None) -> int:
     except InputError as e:  # the data missing included
         print(f"crfmap preset search: {e}", file=sys.stderr)
         return 2
-    if argv == ["--check"]:
-        cached = load_cached()
-        same = cached["best"] == result["best"] and len(cached["trace"]) == len(result["trace"])
-        print(f"search best {result['best']} (Brier {result['best_brier']:.7f}); cache "
-              f"{'agrees' if same else 'DIFFERS: ' + str(cached['best'])}")
-        return 0 if same else 1
-    with atomic_path(CACHE) as tmp:
-        Path(tmp).write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
-    print(f"wrote {CACHE}: best {result['best']} (Brier {result['best_brier']:.7f}), "
-          f"{result['configurations']} configurations, {result['rounds']} rounds")
-    return 0
+    return check_or_write(result, CACHE, load_cached() if argv == ["--check"] else None, "search")
 
 
 if __name__ == "__main__":  # pragma: no cover

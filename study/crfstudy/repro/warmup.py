@@ -173,29 +173,35 @@ def _large_grid(dtype):
     return task
 
 
+def _synthetic_scans(n=6, beams=90):
+    """A few seeded 360 deg scans along a short path, every 17th beam a no-return (the mapping and peers tasks)."""
+    import numpy as np
+
+    from crfmap.recording import ScanSet
+
+    rng = np.random.default_rng(0)
+    ranges = rng.uniform(0.5, 3.0, (n, beams)).astype(np.float32)
+    ranges[:, ::17] = np.inf  # no returns
+    poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
+    return ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+
+
 def _mapping():
     """The grid builder (both models) and the online mapper (with and without a margin) on synthetic scans."""
     from dataclasses import replace
 
-    import numpy as np
 
     from crfmap.mapping.builder import build_grid
     from crfmap.mapping.online import OnlineMapper
-    from crfmap.recording import ScanSet
 
-    rng = np.random.default_rng(0)
-    n, beams = 6, 90
-    ranges = rng.uniform(0.5, 3.0, (n, beams)).astype(np.float32)
-    ranges[:, ::17] = np.inf  # no returns
-    poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
-    scans = ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+    scans = _synthetic_scans()
     every_other = replace(scans, ranges=scans.ranges[::2], laser_poses=scans.laser_poses[::2], stamps=scans.stamps[::2])
     for model in ("arctan", "logodds"):
         build_grid(scans, 0.1, model=model)
         build_grid(every_other, 0.1, model=model)  # strided views: another compiled signature
     for margin in (None, 2):
         mapper = OnlineMapper.for_scans(scans, 0.1, margin=margin)
-        for i in range(n):
+        for i in range(len(scans)):
             mapper.integrate(scans.ranges[i], scans.laser_poses[i])
         mapper.finish(tol=1e-3, max_iter=5)
 
@@ -256,18 +262,11 @@ def _peers():
     (``octomap._octomap_update``, ``_ray_cells``; ``hilbert._features``, ``_fit_batch``, ``_lam``,
     ``_predict``) that no other task reaches.
     """
-    import numpy as np
 
     from crfmap.assess.peers import PEERS, peer_rows
     from crfmap.assess.scansplit import scan_split
-    from crfmap.recording import ScanSet
 
-    rng = np.random.default_rng(0)
-    n, beams = 6, 90
-    ranges = rng.uniform(0.5, 3.0, (n, beams)).astype(np.float32)
-    ranges[:, ::17] = np.inf  # no returns
-    poses = np.column_stack([np.linspace(0, 1, n), np.zeros(n), np.linspace(0, 1, n)])
-    scans = ScanSet(ranges, -np.pi, 2 * np.pi / beams, 0.05, 4.0, poses, np.arange(n, dtype=float))
+    scans = _synthetic_scans()
     peer_rows(scan_split(scans, 0.1), list(PEERS))  # the halves are strided views, as on a real log
 
 
