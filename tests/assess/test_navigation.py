@@ -220,12 +220,16 @@ def test_skeleton_length_equals_a_loop_over_neighbour_pairs(seed):
 
 def test_compare_scores_every_row_for_navigation_on_the_same_resamples():
     sp = _random_split(11, shape=(24, 24))
-    out = compare(sp, n_boot=10, block=8, seed=2, methods=["raw", "mean3x3", D])
+    out = compare(sp, n_boot=10, block=8, seed=2, methods=["raw", "mean3x3", D], keep_beliefs=True)
     assert set(out["_nav"]) == {"raw", "mean3x3", D}
-    for name in out["_nav"]:
+    for name in ("raw", "mean3x3"):  # rows without a gate: nav2 reads their beliefs, scored once
         assert out["_nav"][name]["all"]["auc_ci"] == out[name]["all"]["auc_ci"]
+    # the gated default: Brier and the rest on its beliefs, nav2's reading on its gated map
+    assert not np.array_equal(out["_maps"][D], out["_beliefs"][D])
+    on_map = score(sp, out["_maps"], n_boot=10, block=8, seed=2, metrics=("auc",))
+    assert out["_nav"][D]["all"]["auc_ci"] == on_map[D]["all"]["auc_ci"] != out[D]["all"]["auc_ci"]
     alone = nav_scores(sp, compare(sp, n_boot=0, methods=["raw", "mean3x3", D], keep_beliefs=True,
-                                   nav=False)["_beliefs"], n_boot=10, block=8, seed=2)
+                                   nav=False)["_maps"], n_boot=10, block=8, seed=2)
     assert alone[D]["seen"]["miss_rate_diff_ci"] == out["_nav"][D]["seen"]["miss_rate_diff_ci"]
     assert "_nav" not in compare(sp, n_boot=0, methods=["raw"], nav=False)
 

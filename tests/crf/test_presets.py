@@ -86,7 +86,7 @@ def test_refine_within_bounds_the_senders_and_keeps_the_preset_region():
     assert default.margin is not None and 9 + default.margin < grid.width
     beliefs = default.refine(unseen, within=np.ones(grid.shape, bool)).beliefs.probability
     far = beliefs[:, 9 + default.margin:]  # no LBP there: the observation, and the gate's prior if the preset has one
-    assert np.all(far == (0.5 if default.gate is None else default.gate.unobserved_prior))
+    np.testing.assert_allclose(far, 0.5 if default.gate is None else default.gate.unobserved_prior, rtol=1e-12)
     certainty = get_preset("certainty").refine(unseen).beliefs.probability
     assert np.all(certainty[:, 9 + get_preset("certainty").margin:] == 0.5)
     assert np.array_equal(beliefs, default.refine(unseen).beliefs.probability)

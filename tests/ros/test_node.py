@@ -71,8 +71,18 @@ def test_refine_grid_is_crfmap_infer_default(tmp_path):
     rng = np.random.default_rng(0)
     grid = OccupancyGrid(np.where(rng.random((12, 10)) < 0.3, 0.5, rng.random((12, 10))))
     save_npy(grid, tmp_path / "in.npy")
+    from crfmap.crf.presets import get_preset
+    from crfmap.io.map_server import load_map
+    from crfmap.io.nav2_values import nav2_values
+
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy")]) == 0
-    assert np.array_equal(refine_grid(grid).probability, load_grid(tmp_path / "out.npy").probability)
+    assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.yaml")]) == 0
+    refined = get_preset().refine(grid)
+    # a .npy gets the probabilities, a map for nav2 the gate's decision: what the node publishes
+    assert np.array_equal(refined.beliefs.probability, load_grid(tmp_path / "out.npy").probability)
+    assert np.array_equal(refine_grid(grid).probability, refined.nav2_map.probability)
+    assert not np.array_equal(refined.beliefs.probability, refined.nav2_map.probability)  # the gate moved some cells
+    assert np.array_equal(nav2_values(refine_grid(grid)), load_map(tmp_path / "out.yaml").to_int8())
 
 
 def test_map_node_skips_bad_scans_and_waits_for_tf():
@@ -129,7 +139,7 @@ def test_map_node_accounts_for_every_scan_and_logs_the_integrated_ones(tmp_path)
     mapper = OnlineMapper.for_sensor((-5, -5, 5, 5), 0.1, -0.5, 0.5, 3, 0.1, 5.0, margin=3)
     for pose in poses:
         mapper.integrate(np.array([1.0, 2.0, 1.0], np.float32), pose)
-    assert np.array_equal(sent[-1].data, nav2_values(mapper.beliefs()).reshape(-1))
+    assert np.array_equal(sent[-1].data, nav2_values(mapper.nav2_map()).reshape(-1))
 
 
 def _room_recording(n=10, beams=91, seed=3):
@@ -218,7 +228,7 @@ def test_map_node_final_map_is_the_presets_offline_refinement(tmp_path, preset):
     assert offline.converged
     np.testing.assert_allclose(node.mapper.beliefs().probability, offline.beliefs.probability, atol=2e-3)
     published = final.data.reshape(final.height, final.width).astype(int)
-    expected = nav2_values(offline.beliefs).astype(int)  # what nav2 reads: 100 / 0 / -1
+    expected = nav2_values(offline.nav2_map).astype(int)  # what nav2 reads: 100 / 0 / -1
     assert set(np.unique(published)) <= {-1, 0, 100}
     assert np.mean(published != expected) < 1e-3  # only cells within 2e-3 of a threshold may differ
     assert (published == -1).any() and (published == 100).sum() >= 0.9 * (expected == 100).sum() > 0

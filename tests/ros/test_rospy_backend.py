@@ -77,7 +77,7 @@ def test_map_node_through_roscore(tmp_path):
     mapper = OnlineMapper.for_sensor(bounds, 0.1, scans.angle_min, scans.angle_increment, scans.ranges.shape[1],
                                      scans.range_min, scans.range_max, radius=4.0, margin=3)
     mapper.run(scans)
-    expected = nav2_values(mapper.beliefs()).reshape(-1)
+    expected = nav2_values(mapper.nav2_map()).reshape(-1)
     last = int(round(scans.stamps[-1] * 1e9))
 
     port = _free_port()

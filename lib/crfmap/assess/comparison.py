@@ -56,7 +56,9 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     ``"_seconds"``, every other row's paired Brier and log-loss differences to the preset under
     ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``); ``keep_beliefs``: every
     scored ``{name: P}`` under ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more
-    ``{name: P}`` rows. ``nav`` (default): every row read the way nav2 reads the written trinary map, scored with
+    ``{name: P}`` rows (and ``"_maps"``: each row's map for nav2, a gated preset's ``nav2_map``). Brier, log-loss and
+    the other probability scores read each row's beliefs; ``nav`` (default): every row's map for nav2 (a gated preset's
+    decision, :attr:`~crfmap.crf.inference.result.LBPResult.nav2_map`) read the way nav2 reads the written trinary map, scored with
     :func:`crfmap.assess.navigation.nav_scores` against the raw grid on the same resamples, under ``"_nav"``
     (``{name: {group: {metric, metric_ci, metric_diff, metric_diff_ci}, "map": {...}}}``). ``progress``: a tqdm
     bar of the steps (baselines, the preset, each peer, the scores, the nav2 reading).
@@ -71,9 +73,11 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     predictions = all_baselines(split, names=[m for m in wanted if m in BASELINES])
     bar.update(1)
     out_lbp = None
+    maps = {}  # a preset's map for nav2 where it differs from its beliefs (an evidence gate's decision)
     if preset in wanted:
         result = get_preset(preset).refine(hits=split.first_hits, passes=split.first_passes)  # as users run it
         predictions[preset] = result.beliefs.probability
+        maps[preset] = result.nav2_map.probability
         out_lbp = {"converged": result.converged, "iterations": result.iterations, "last_change": result.last_change}
         bar.update(1)
     seconds = {}
@@ -83,11 +87,13 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
         seconds.update(took)
         bar.update(1)
     predictions.update(extra or {})
+    maps = {**predictions, **maps}
     out = score(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw")
     bar.update(1)
-    if nav:
-        out["_nav"] = nav_scores(split, predictions, n_boot=n_boot, block=block, seed=seed, reference="raw",
-                                 scores=out)
+    if nav:  # nav2 reads the written map: a gated preset's decision, every other row's P
+        same = all(maps[name] is p for name, p in predictions.items())  # else its auc / nll are the maps' own
+        out["_nav"] = nav_scores(split, maps, n_boot=n_boot, block=block, seed=seed, reference="raw",
+                                 scores=out if same else None)
         bar.update(1)
     if out_lbp is not None:
         out["_lbp"] = out_lbp
@@ -101,6 +107,7 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
     bar.close()
     if keep_beliefs:
         out["_beliefs"] = predictions
+        out["_maps"] = maps
     return out
 
 

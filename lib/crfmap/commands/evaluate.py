@@ -77,13 +77,13 @@ def run(args: argparse.Namespace) -> int:
     split = scan_split(rec.scans, args.resolution, parity=args.parity, progress=progress)
     scores = compare(split, args.preset, n_boot=args.boot, block=args.block, seed=args.seed, methods=methods,
                      keep_beliefs=True, nav=args.nav, progress=progress)
-    beliefs = scores.pop("_beliefs")
+    beliefs, maps = scores.pop("_beliefs"), scores.pop("_maps")  # probabilities; the maps nav2 reads
     calibration = split_calibration(split, beliefs, group=args.group)
     scores["_ece"] = {name: c["ece"] for name, c in calibration.items()}
     if args.localisation:
         from crfmap.assess.localisation import compare_localisation
 
-        scores["_localisation"] = compare_localisation(beliefs, split.resolution, split.origin, split.second_scans,
+        scores["_localisation"] = compare_localisation(maps, split.resolution, split.origin, split.second_scans,
                                                        n_boot=args.boot, seed=args.seed)
     if args.json:
         print(json.dumps(_finite(scores)))

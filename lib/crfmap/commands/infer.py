@@ -174,7 +174,9 @@ def run(args: argparse.Namespace) -> int:
                                    dtype=np.float32 if args.float32 else np.dtype(solver["dtype"]).type)
     finally:
         bar.close()
-    nav2_view = save_map_output(result.beliefs, args.output, args)
+    # a map for nav2 gets the gate's decision; a .npy the probabilities (the beliefs)
+    out = result.nav2_map if str(args.output).lower().endswith((".yaml", ".yml")) else result.beliefs
+    nav2_view = save_map_output(out, args.output, args)
     print(f"{args.input}: {grid.width}x{grid.height} cells, {result.summary()}, LBP {result.seconds:.3f} s"
           f"{kernel_time(kernels.seconds, compiling.seconds)} -> {args.output}: {nav2_view}")
     return 0

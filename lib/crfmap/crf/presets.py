@@ -25,9 +25,12 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
   0.441 is the exact model's), followed by an evidence gate (:mod:`crfmap.crf.model.gating`) that lets nav2 read a
   cell free only where its own beams passed it at least twice net (never a cell the raw grid does not call free),
   keeps repeatedly hit and on-a-wall cells lethal, lets lone hits (ghosts) go, keeps walls from growing into space
-  no beam reached, and gives never-observed cells the building's rate P = 0.25 (still unknown to nav2). Chosen for
+  no beam reached, and gives never-observed cells the building's rate P = 0.3 (still unknown to nav2). Chosen for
   what a robot does with the map (issue 38: dangerous misses, ghosts, wall thickness, AMCL localisation), where
-  ``certainty`` wins Brier but opens walls and triples their thickness.
+  ``certainty`` opens walls and triples their thickness. Its result has two faces: ``beliefs``, the probabilities
+  (LBP and the never-observed prior: what a ``.npy`` holds and Brier / calibration score), and ``nav2_map``, those
+  beliefs moved by the gate into the class each cell's own evidence allows (what a map_server map holds and the
+  node publishes).
 
 ``temperature`` T (default 1: no change) scales the output's log-odds, ``P' = sigmoid(logit(P) / T)``
 (:func:`temper`), applied to the whole refined map: T > 1 softens an over-confident map, T < 1 sharpens
@@ -276,7 +279,9 @@ class Preset:
         the observation itself (0.5 where nothing was observed); a ``temperature`` other than 1 then
         tempers the whole map (:func:`temper`). ``within`` (a boolean mask such as a bound around the robot)
         further limits the cells that send messages, as ``infer``'s ``region``. ``options`` go to
-        :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...).
+        :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...). With an evidence
+        gate, the beliefs take its never-observed prior (:meth:`EvidenceGate.calibrate`: the probabilities)
+        and ``result.nav2_map`` is the map for nav2 (:meth:`EvidenceGate.decide`: the decision).
 
         >>> r = get_preset("certainty").refine(np.array([[0.5, 0.9, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]]))
         >>> r.converged, float(r.beliefs.probability[0, -1])
@@ -307,16 +312,18 @@ class Preset:
             np.copyto(result.beliefs.probability, unary, where=~own)  # the result's own array: checked, in [0, 1]
         # after LBP and the margin: the gate reads each cell's own evidence, everywhere (a never-observed cell beyond the
         # margin too gets the building's rate: still unknown to nav2, and a calibrated probability in a .npy)
+        dtype = result.beliefs.probability.dtype
         if self.gate is not None:
-            if hits is not None:
-                gated = self.gate.apply(result.beliefs.probability, hits=hits, passes=passes)
-            else:
-                gated = self.gate.apply(result.beliefs.probability, evidence=evidence_from_probability(g.probability),
-                                        observed=observed)
-            result.beliefs = result.beliefs.with_probability(gated.astype(result.beliefs.probability.dtype))
+            cells = dict(hits=hits, passes=passes) if hits is not None else dict(
+                evidence=evidence_from_probability(g.probability), observed=observed)
+            calibrated = self.gate.calibrate(result.beliefs.probability, **cells)
+            result.beliefs = result.beliefs.with_probability(calibrated.astype(dtype))
         if self.temperature != 1.0:  # the whole output, observation-only cells too
             probability = temper(result.beliefs.probability, self.temperature)
-            result.beliefs = result.beliefs.with_probability(probability.astype(result.beliefs.probability.dtype))
+            result.beliefs = result.beliefs.with_probability(probability.astype(dtype))
+        if self.gate is not None:  # the decision nav2 reads, from the beliefs as reported
+            result.gated = result.beliefs.with_probability(
+                self.gate.decide(result.beliefs.probability, **cells).astype(dtype))
         return result
 
 
@@ -331,8 +338,8 @@ PRESETS = {
     # Chosen for navigation (issue 38) on Intel and ACES only, confirmed on the two ROS bags, MIT CSAIL and Freiburg
     # 101: the certainty model, J and pi fitted by held-out log-loss with occupied cells weighted 3x (dangerous
     # misses the costlier error) over the scan, temporal and block splits of Intel and ACES on the grid
-    # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.2 .. 0.5}: J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it
-    # converges 2.4x faster than at it for 0.0003 Brier), pi = 0.25 (Intel's isotonic P at x = 0 is 0.248); the gate's
+    # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.2 .. 0.5}, scoring the beliefs (the prior, not the gate's decision):
+    # J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it converges 2.4x faster than at it), pi = 0.3; the gate's
     # free_evidence = 2 is the point of the measured Brier / dangerous-miss curve where no refined free cell is a cell
     # the raw grid does not call free. `python -m crfstudy.analysis.gate_search` reruns the J x pi search (cached in
     # study/crfstudy/analysis/gate_search_intel_aces.json); `crfmap evaluate`, notebook 10 and notebook 12 score it
@@ -341,9 +348,9 @@ PRESETS = {
         "gated", "recommended for navigation: the certainty model at J = 0.30 (below LBP's Bethe point), gated by "
         "each cell's own evidence: free only after two net passes (never a cell the raw grid does not call free), "
         "repeated or on-a-wall hits stay lethal, lone hits go, walls do not grow into unobserved space, "
-        "never-observed cells at P = 0.25 (still unknown to nav2)",
+        "never-observed cells at P = 0.3 (still unknown to nav2)",
         coupling_table(0.30), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5,
-        gate=EvidenceGate(free_evidence=2, lethal_evidence=2, line_hits=True, wall_lines=True, unobserved_prior=0.25)),
+        gate=EvidenceGate(free_evidence=2, lethal_evidence=2, line_hits=True, wall_lines=True, unobserved_prior=0.3)),
 }
 
 

@@ -224,9 +224,10 @@ class OnlineMapper:
         t0 = time.perf_counter()
         changes = np.asarray(self.lbp.run(max_iter, tol, threads), float)
         beliefs = self.beliefs()
+        gated = None if self.preset.gate is None else self.nav2_map(beliefs)
         return LBPResult(beliefs=beliefs, iterations=len(changes), max_change=changes,
                          converged=bool(changes.size and changes[-1] < tol), messages=self.messages(),
-                         seconds=time.perf_counter() - t0, schedule="checkerboard", kernel="fast")
+                         seconds=time.perf_counter() - t0, schedule="checkerboard", kernel="fast", gated=gated)
 
     # --- reading ------------------------------------------------------------------------------------
     def _grid(self, probability, **meta) -> OccupancyGrid:
@@ -251,19 +252,27 @@ class OnlineMapper:
         """The current LBP beliefs P(occupied) of every cell, as the preset's refinement reports them.
 
         Outside the preset's :meth:`region` a cell keeps its observation (0.5: never observed), a preset's
-        evidence gate (:mod:`crfmap.crf.model.gating`) reads each cell's own counts inside it, and a preset
+        evidence gate (:mod:`crfmap.crf.model.gating`) gives never-observed cells its prior, and a preset
         temperature other than 1 tempers the whole map, as :meth:`crfmap.crf.presets.Preset.refine` does.
         """
         probability = np.clip(self.lbp.beliefs(), 0.0, 1.0)
         region = None if self.margin is None else self.region()
         if region is not None:  # cells next to a sender receive messages but are outside the refinement
             probability[~region] = 0.5
-        if self.preset.gate is not None:
-            gated = self.preset.gate.apply(probability, hits=self.hits.occupied, passes=self.hits.empty)
-            probability = gated  # everywhere, as Preset.refine
+        if self.preset.gate is not None:  # everywhere, as Preset.refine
+            probability = self.preset.gate.calibrate(probability, hits=self.hits.occupied, passes=self.hits.empty)
         if self.preset.temperature != 1.0:
             probability = temper(probability, self.preset.temperature)
         return self._grid(probability, model="crf-online", preset=self.preset.name)
+
+    def nav2_map(self, beliefs: OccupancyGrid | None = None) -> OccupancyGrid:
+        """The map to hand nav2: :meth:`beliefs` (or the given ones) moved by the preset's evidence gate into the class
+        each cell's own counts allow, as ``Preset.refine(...).nav2_map``; the beliefs themselves without a gate."""
+        beliefs = self.beliefs() if beliefs is None else beliefs
+        if self.preset.gate is None:
+            return beliefs
+        decided = self.preset.gate.decide(beliefs.probability, hits=self.hits.occupied, passes=self.hits.empty)
+        return beliefs.with_probability(decided)
 
     def messages(self) -> np.ndarray:
         """The current messages as probabilities, shape (4, H, W) (see :func:`crfmap.crf.inference.lbp.infer`)."""

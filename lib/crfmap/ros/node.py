@@ -43,7 +43,7 @@ IDLE_SECONDS = 0.1  # longest wait for messages between two looks at the stop fl
 
 
 def refine_grid(grid):
-    """The default preset's refinement of ``grid``: what ``crfmap infer IN OUT`` computes with its defaults.
+    """The default preset's refinement of ``grid`` as nav2 gets it: the map ``crfmap infer IN OUT.yaml`` writes.
 
     >>> import numpy as np
     >>> from crfmap.grid import OccupancyGrid
@@ -53,7 +53,7 @@ def refine_grid(grid):
     """
     from crfmap.crf.presets import DEFAULT_PRESET, get_preset
 
-    return get_preset(DEFAULT_PRESET).refine(grid).beliefs  # the preset's own solver, as crfmap infer runs it
+    return get_preset(DEFAULT_PRESET).refine(grid).nav2_map  # the preset's own solver, as crfmap infer runs it
 
 
 def log_line(text):
@@ -256,7 +256,7 @@ class MapNode:
         """Integrate the scans tf now covers (for a slice of time), publish if due; seconds until the next call."""
         self._integrate_ready(time.perf_counter() + SLICE_SECONDS)
         if self.integrated > self.published_scans and now >= self.last_publish + self.period:
-            out = grid_out(self.mapper.beliefs(), self.last_stamp_ns, self.fixed_frame, self.values)
+            out = grid_out(self.mapper.nav2_map(), self.last_stamp_ns, self.fixed_frame, self.values)
             self.publishers["map"](out)
             self.publishers["metadata"](out)
             self.published_scans = self.integrated
@@ -276,7 +276,7 @@ class MapNode:
         if self.mapper is None:
             return
         result = self.mapper.finish()
-        out = grid_out(result.beliefs, self.last_stamp_ns, self.fixed_frame, self.values)
+        out = grid_out(result.nav2_map, self.last_stamp_ns, self.fixed_frame, self.values)
         self.publishers["map"](out)
         self.publishers["metadata"](out)
         self.log(f"final map ({self.mapper.preset.name} preset, {self.integrated} scans): whole-grid LBP "

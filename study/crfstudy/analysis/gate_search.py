@@ -79,7 +79,8 @@ def search(splits, couplings=COUPLINGS, priors=PRIORS, gate=None) -> list:
             row = {"J": coupling, "pi": prior, "iterations": max(r.iterations for r in beliefs.values())}
             wll, brier = [], []
             for key, s in splits.items():
-                q = g.apply(beliefs[key].beliefs.probability, hits=s.first_hits, passes=s.first_passes)
+                # the beliefs the preset reports (the prior, not the gate's nav2 decision): probabilities to score
+                q = g.calibrate(beliefs[key].beliefs.probability, hits=s.first_hits, passes=s.first_passes)
                 mask = s.group("all")
                 b = float(np.mean((q[mask] - s.labels()[mask]) ** 2))
                 row[f"brier_{key[0]}_{key[1]}"] = b

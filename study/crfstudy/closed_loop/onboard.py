@@ -55,7 +55,7 @@ class RawGrid:
 
 class OnlineCRF:
     """A preset's CRF kept fresh around the robot (:class:`~crfmap.mapping.online.OnlineMapper`, the default preset):
-    bounded LBP on a disc after every scan; its beliefs read as the preset's refinement reads them (region, gate)."""
+    bounded LBP on a disc after every scan; the planner reads its map for nav2 (region, gate), as the node publishes it."""
 
     def __init__(self, bounds, resolution, laser, preset=DEFAULT_PRESET, **mapper_options):
         self.mapper = OnlineMapper(_counter(bounds, resolution, laser), preset, **mapper_options)
@@ -65,7 +65,7 @@ class OnlineCRF:
         self.mapper.integrate(_ranges(ranges), laser_pose, threads=1)
 
     def probability(self) -> np.ndarray:
-        return self.mapper.beliefs().probability
+        return self.mapper.nav2_map().probability
 
 
 class OctoMapGrid:
@@ -101,7 +101,7 @@ class RefinedOnArrival:
         cells = self.hits.add_scan(_ranges(ranges), laser_pose)
         self.stale[cells[:, 1], cells[:, 0]] = True
         if self.hits.scans % self.every == 0:
-            self.refined = self.preset.refine(hits=self.hits.occupied, passes=self.hits.empty).beliefs.probability
+            self.refined = self.preset.refine(hits=self.hits.occupied, passes=self.hits.empty).nav2_map.probability
             self.stale[:] = False
             self.refinements += 1
 

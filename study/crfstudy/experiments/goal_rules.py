@@ -120,8 +120,12 @@ def recording_goals(summary: dict) -> list:
                        f"{DEFAULT_PRESET} minus {OLD_DEFAULT} {_diff_text(b['diff'], b['ci'])}", only))
     ece = summary["ece"]
     e_new, e_old = ece[DEFAULT_PRESET], ece[OLD_DEFAULT]
-    out.append(Verdict("1b", f"ECE no worse than {OLD_DEFAULT}", bool(e_new <= e_old) if _finite(e_new, e_old) else None,
-                       f"ECE {e_new:.4f} vs {e_old:.4f}"))
+    paired = summary.get("ece_vs_certainty")  # the paired block-bootstrap interval of the difference, where scored
+    if paired is None:  # a point comparison only
+        met, only, text = (bool(e_new <= e_old) if _finite(e_new, e_old) else None), False, ""
+    else:
+        (met, only), text = no_worse(paired["diff"], paired["ci"]), f"; diff {_diff_text(paired['diff'], paired['ci'])}"
+    out.append(Verdict("1b", f"ECE no worse than {OLD_DEFAULT}", met, f"ECE {e_new:.4f} vs {e_old:.4f}{text}", only))
     harder = summary.get("harder") or {}
     parts, wins = [], []
     for kind, h in harder.items():
@@ -288,6 +292,7 @@ def example_summary() -> dict:
                             "rotation_error_diff": 0.0, "rotation_error_diff_ci": [-0.1, 0.1]}}
     return {"brier_vs_certainty": {"diff": 0.0002, "ci": [-0.0001, 0.0005]},
             "ece": {DEFAULT_PRESET: 0.010, OLD_DEFAULT: 0.012, "raw": 0.08},
+            "ece_vs_certainty": {"diff": -0.002, "ci": [-0.004, 0.0005]},
             "harder": {"temporal halves": {"opponent": "isotonic on x", "diff": 0.002, "ci": [0.001, 0.003]},
                        "scan blocks": {"opponent": "isotonic on x", "diff": -0.001, "ci": [-0.002, -0.0005]}},
             "nav": rows, "localisation": loc,

@@ -136,7 +136,7 @@ def score_recording(scans, settings: GoalSettings, calibrators: dict, progress=N
     ``scans``: the recording's ScanSet; ``calibrators``: :func:`fit_calibrators` of the training recording;
     ``progress``: a callable given a short label before each stage (a tqdm bar's ``set_postfix_str``).
     """
-    from crfmap.assess.calibration import split_calibration
+    from crfmap.assess.calibration import paired_calibration, split_calibration
     from crfmap.assess.comparison import compare
     from crfmap.assess.localisation import compare_localisation
     from crfmap.assess.navigation import nav_scores
@@ -153,7 +153,7 @@ def score_recording(scans, settings: GoalSettings, calibrators: dict, progress=N
     say("compare" + (" (fitting " + ", ".join(s.peers) + ")" if s.peers else ""))
     res = compare(split, DEFAULT_PRESET, n_boot=s.n_boot, block=s.block, seed=s.seed, extra={OLD_DEFAULT: old},
                   keep_beliefs=True, methods=["raw", DEFAULT_PRESET, *s.peers])
-    maps = res["_beliefs"]
+    beliefs, maps = res["_beliefs"], res["_maps"]  # probabilities (Brier, ECE) and the maps nav2 reads (the rest)
     # goal 8's "within its interval of the best" on lethal recall: the best of raw and the peers against the default,
     # on the same resamples (same split, block and seed); only that pair is scored again
     recall = {m: res["_nav"][m]["all"]["lethal_recall"] for m in maps if m not in (DEFAULT_PRESET, OLD_DEFAULT)}
@@ -162,6 +162,8 @@ def score_recording(scans, settings: GoalSettings, calibrators: dict, progress=N
                         block=s.block, seed=s.seed, reference=DEFAULT_PRESET, scores=res)
     old_vs = res["_vs_preset"][OLD_DEFAULT]["all"]  # certainty minus default: flip to default minus certainty
     ci = old_vs.get("brier_diff_ci")
+    ece_pair = paired_calibration(split, {m: beliefs[m] for m in (OLD_DEFAULT, DEFAULT_PRESET)}, OLD_DEFAULT,
+                                  n_boot=s.n_boot, block=s.block, seed=s.seed)[DEFAULT_PRESET]
     say("localisation")
     # goal 6 is the default against raw; the old default beside them (the peers' AMCL is not a goal: time saved)
     on = {m: maps[m] for m in ("raw", OLD_DEFAULT, DEFAULT_PRESET)}
@@ -173,7 +175,8 @@ def score_recording(scans, settings: GoalSettings, calibrators: dict, progress=N
         "scans": len(scans), "grid": list(split.shape), "cells_scored": int(split.group("all").sum()),
         "brier": {m: {g: res[m][g]["brier"] for g in ("all", "seen", "unseen")} for m in maps},
         "brier_vs_certainty": {"diff": -old_vs["brier_diff"], "ci": None if ci is None else [-ci[1], -ci[0]]},
-        "ece": {m: c["ece"] for m, c in split_calibration(split, maps).items()},
+        "ece": {m: c["ece"] for m, c in split_calibration(split, beliefs).items()},
+        "ece_vs_certainty": {"diff": ece_pair["ece_diff"], "ci": _pair(ece_pair["ece_diff_ci"])},
         "nav": {m: _nav_entry(res["_nav"][m]) for m in maps},
         "nav_vs_default": {best: {k: (_pair(v) if k.endswith("_ci") else v) for k, v in versus[best]["all"].items()
                                   if k.startswith("lethal_recall_diff")}},

@@ -67,8 +67,9 @@ def _with(path, value):
 @pytest.mark.parametrize("path, value, goal, expected", [
     (("brier_vs_certainty",), {"diff": 0.0004, "ci": [0.0001, 0.0007]}, "1a", "missed"),
     (("brier_vs_certainty",), {"diff": -0.0004, "ci": [-0.0007, 0.0]}, "1a", "met"),
-    (("ece", D), 0.012, "1b", "met"),  # equal ECE is no worse
-    (("ece", D), 0.0121, "1b", "missed"),
+    (("ece_vs_certainty", "ci"), [-0.004, 0.0], "1b", "met"),  # the paired interval reaches no difference
+    (("ece_vs_certainty", "ci"), [0.0001, 0.004], "1b", "missed"),  # shown worse
+    (("ece_vs_certainty", "diff"), 0.001, "1b", "met*"),  # worse point estimate, not shown worse
     (("harder", "temporal halves", "ci"), [-0.003, -1e-9], "1c", "met"),  # every harder split won
     (("harder", "temporal halves", "ci"), [-0.003, 0.0], "1c", "missed"),
     (("nav", D, "seen", "miss_rate_diff_ci"), [1e-9, 0.01], "2a", "missed"),

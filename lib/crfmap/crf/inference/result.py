@@ -37,6 +37,9 @@ class LBPResult:
         messages ("unpack") on the whole-grid fast kernel, and on the coarse levels of
         ``init="coarse"`` ("coarse"); "compile": seconds numba spent compiling or loading kernels
         during the call (not in ``seconds``; absent when none); "pack" and "iterate" include it.
+    gated : OccupancyGrid or None
+        A preset's beliefs moved by its evidence gate into the nav2 class each cell's own evidence allows
+        (:meth:`crfmap.crf.model.gating.EvidenceGate.decide`); None when no gate ran. Read it as :attr:`nav2_map`.
     """
 
     beliefs: OccupancyGrid
@@ -48,6 +51,15 @@ class LBPResult:
     schedule: str = "checkerboard"
     kernel: str = "plain"
     timings: dict = field(default_factory=dict)
+    gated: OccupancyGrid | None = field(default=None, repr=False)
+
+    @property
+    def nav2_map(self) -> OccupancyGrid:
+        """The map to hand nav2 (write as a map_server map, publish on /map): the gated beliefs, else the beliefs.
+
+        :attr:`beliefs` are the probabilities (score them, fuse them); this is the decision nav2 reads from them.
+        """
+        return self.beliefs if self.gated is None else self.gated
 
     @property
     def last_change(self) -> float:

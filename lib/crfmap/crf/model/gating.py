@@ -33,14 +33,21 @@ inside the nearest class the evidence allows:
   floor above, a never-observed cell still reads unknown to nav2; only its probability is calibrated.
   pi = 0.5 changes nothing.
 
-Apart from that prior, the gate changes only beliefs that would cross a threshold; between those it keeps LBP's value,
-so the map's probabilities (Brier, calibration) stay the CRF's everywhere else.
+The gate has two outputs, because a probability and a decision answer different questions.
+:meth:`EvidenceGate.calibrate` applies the prior only: the refinement's beliefs, the probabilities a user scores or
+fuses (``Preset.refine(...).beliefs``, a ``.npy`` output; Brier and calibration are measured on them).
+:meth:`EvidenceGate.decide` then moves each belief that would cross one of nav2's thresholds just inside the class the
+cell's own evidence allows: the map nav2 reads (``LBPResult.nav2_map``: what every path writes as a map_server map
+and publishes). A belief the gate keeps from crossing is not a better probability (a cell the CRF calls free with
+P = 0.05 on one pass is free 9 times in 10), only a safer decision, so it is kept out of the beliefs.
 
->>> gate = EvidenceGate()
+>>> gate = EvidenceGate(unobserved_prior=0.25)
 >>> p = np.array([[0.10, 0.10, 0.10, 0.90, 0.30]])
 >>> hits, passes = np.array([[0, 0, 0, 3, 0]]), np.array([[5, 1, 0, 0, 0]])
+>>> gate.calibrate(p, hits, passes).round(3).tolist()   # the never-observed cells take the prior
+[[0.1, 0.1, 0.036, 0.9, 0.125]]
 >>> gate.apply(p, hits, passes).round(3).tolist()   # free kept, x = -1 and unseen raised, x = 3 kept
-[[0.1, 0.21, 0.21, 0.9, 0.3]]
+[[0.1, 0.21, 0.21, 0.9, 0.21]]
 """
 from __future__ import annotations
 
@@ -142,12 +149,34 @@ class EvidenceGate:
             _check_evidence_count(self.lethal_evidence, "lethal_evidence")
 
     def apply(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
-        """The gated belief, a new float64 [y, x] array.
+        """The map for nav2, a new float64 [y, x] array: :meth:`calibrate`, then :meth:`decide`.
 
         Give the cell counts (``hits``, ``passes``), or the signed ``evidence`` x with an ``observed``
         mask (a map file's P read back by :func:`crfmap.crf.presets.evidence_from_probability`;
         then observed = x != 0 unless given).
         """
+        cells = self._cells(probability, hits, passes, evidence, observed)
+        return self._decide(self._calibrate(*cells), *cells[1:])
+
+    def calibrate(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
+        """The beliefs with the never-observed prior only (a new float64 [y, x] array): probabilities to score.
+
+        Only never-observed cells off every wall line change (``unobserved_prior``); no belief is moved toward a
+        class. Arguments as :meth:`apply`.
+        """
+        return self._calibrate(*self._cells(probability, hits, passes, evidence, observed))
+
+    def decide(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
+        """Calibrated beliefs (:meth:`calibrate`'s) moved into the nav2 class each cell's evidence allows (new array).
+
+        Only beliefs that would cross one of nav2's thresholds move, each just inside the nearest allowed class.
+        Arguments as :meth:`apply`.
+        """
+        cells = self._cells(probability, hits, passes, evidence, observed)
+        return self._decide(*cells)
+
+    def _cells(self, probability, hits, passes, evidence, observed):
+        """(P as a new float64 array, evidence x, seen mask, observed walls, never-observed cells off wall lines)."""
         p = np.array(probability, dtype=np.float64)
         if p.ndim != 2:
             raise InputError("probability", f"must be a 2-D grid, got shape {p.shape}")
@@ -171,10 +200,17 @@ class EvidenceGate:
         off_line = ~seen  # never observed, and (wall_lines) not in a gap of an observed wall
         if self.wall_lines:
             off_line &= ~wall_line_gaps(walls)
+        return p, x, walls, off_line
+
+    def _calibrate(self, p, x, walls, off_line):
         if self.unobserved_prior != 0.5:
             q = np.clip(p, LOGIT_FLOOR, 1 - LOGIT_FLOOR)
             shift = math.log(self.unobserved_prior / (1 - self.unobserved_prior))
             p = np.where(off_line, 1 / (1 + np.exp(-(np.log(q) - np.log1p(-q) + shift))), p)
+        return p
+
+    def _decide(self, p, x, walls, off_line):
+        p = p.copy()
         not_free = ~(x <= -self.free_evidence)
         np.maximum(p, UNKNOWN_FLOOR, out=p, where=not_free & (p < UNKNOWN_FLOOR))
         keep = x >= self.lethal_evidence
