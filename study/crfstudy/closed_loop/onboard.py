@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.checks import check_int
-from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+from crfmap.crf.presets import DEFAULT_PRESET, Preset, get_preset
 from crfmap.errors import InputError
 from crfmap.mapping.builder import HitCounter
 from crfmap.mapping.octomap import OctoMapUpdater
@@ -91,7 +91,7 @@ class RefinedOnArrival:
 
     def __init__(self, bounds, resolution, laser, every=10, preset=DEFAULT_PRESET):
         self.every = check_int("every", every, low=1)
-        self.preset = get_preset(preset)
+        self.preset = preset if isinstance(preset, Preset) else get_preset(preset)
         self.hits = _counter(bounds, resolution, laser)
         self.refined = np.full((self.hits.height, self.hits.width), 0.5)
         self.stale = np.zeros(self.refined.shape, bool)
