@@ -9,7 +9,7 @@ CORES  ?= 2
 export MPLBACKEND := Agg
 export NUMBA_CACHE_DIR := $(CURDIR)/.venv/numba-cache
 
-.PHONY: all test kernel-coverage reproduce sweep dry-run notebooks paper bench venv warm lab clean
+.PHONY: all test kernel-coverage reproduce sweep slurm-sweep dry-run notebooks paper bench venv warm lab clean
 
 all: test
 
@@ -70,6 +70,12 @@ sweep:
 	@test -n "$(strip $(SWEEP))" || { echo "make sweep: give SWEEP=name (a file of workflow/sweeps/) or SWEEP=path.yaml" >&2; exit 2; }
 	$(MAKE) --no-print-directory warm
 	$(BIN)/python -m crfstudy.repro.reproduce --cores $(CORES) --sweep $(SWEEP) $(if $(MAX_POINTS),--max-points $(MAX_POINTS))
+
+# make slurm-sweep [SWEEP=02_noise_quick]: the SLURM profile for real, on a one-node cluster of this machine (needs
+# root, Debian's slurm-wlm and munge): the cluster starts in a temporary folder, every point of the sweep runs as a
+# SLURM job through workflow/profiles/slurm, the outputs are checked, the cluster stops (crfstudy.repro.local_slurm)
+slurm-sweep: warm
+	$(BIN)/python -m crfstudy.repro.local_slurm sweep $(or $(strip $(SWEEP)),02_noise_quick) --cores $(CORES)
 
 dry-run: $(STAMP)
 	$(BIN)/python -m crfstudy.repro.reproduce --dry-run
