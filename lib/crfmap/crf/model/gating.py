@@ -9,8 +9,8 @@ x = hits - passes agrees with the class it puts the cell in, and otherwise moves
 inside the nearest class the evidence allows:
 
 - **free needs the cell's own passes**: a cell with x > -``free_evidence`` is never free; its
-  belief is raised to at least :data:`UNKNOWN_FLOOR` (just above nav2's free threshold). With the
-  default ``free_evidence = 2`` the refined map's free cells are a subset of the raw arctan grid's
+  belief is raised to at least :data:`UNKNOWN_FLOOR` (just above nav2's free threshold). With
+  ``free_evidence`` 2 or more the refined map's free cells are a subset of the raw arctan grid's
   (P = 0.5 + atan(x) / pi <= 0.196 exactly when x <= -2), so no refinement opens a wall the raw
   map kept closed or unknown.
 - **repeatedly hit cells stay lethal**: a cell with x >= ``lethal_evidence`` keeps at least
