@@ -6,7 +6,7 @@ import re
 import numpy as np
 import pytest
 
-from crfmap.assess.navigation import (COUNTS, GHOST_PASSES, RATIOS, nav2_classes, nav_scores, skeleton_length, wall_shape)
+from crfmap.assess.navigation import (COUNTS, FACE_CAP, GHOST_PASSES, RATIOS, nav2_classes, nav_scores, skeleton_length, wall_shape)
 from crfmap.io.nav2_values import nav2_values
 from crfmap.assess.comparison import compare
 from crfmap.assess.scansplit import GROUPS, ScanSplit, block_resamples, percentile_interval, score
@@ -53,6 +53,11 @@ def _naive_counts(sp, p, group, radius):
     height, width = p.shape
     lethal_cells = [(i, j) for i in range(height) for j in range(width) if v[i, j] == 100]
     c = dict.fromkeys(COUNTS, 0)
+
+    def held_out(i, j):  # (observed by the second half, occupied there)
+        h2, e2 = int(sp.second_hits[i, j]), int(sp.second_passes[i, j])
+        return h2 + e2 > 0, h2 >= e2 and h2 > 0
+
     for i in range(height):
         for j in range(width):
             h2, e2 = int(sp.second_hits[i, j]), int(sp.second_passes[i, j])
@@ -72,6 +77,12 @@ def _naive_counts(sp, p, group, radius):
             c["ghost_candidates"] += candidate
             c["ghosts"] += candidate and lethal
             c["free"] += free
+            sides = [(i + a, j + b) for a, b in ((0, 1), (0, -1), (1, 0), (-1, 0))
+                     if 0 <= i + a < height and 0 <= j + b < width]
+            if occupied and any(held_out(*s) == (True, False) for s in sides):  # a face the held-out scans saw
+                c["face_cells"] += 1
+                c["face_offset_cells"] += min(min((math.hypot(i - a, j - b) for a, b in lethal_cells),
+                                                  default=math.inf), FACE_CAP)
     return c
 
 
@@ -86,7 +97,8 @@ def test_every_metric_equals_a_per_cell_loop(seed):
     for group in GROUPS:
         c = _naive_counts(sp, p, group, radius)
         entry = out["p"][group]
-        assert {k: entry[k] for k in COUNTS} == c
+        assert {k: entry[k] for k in COUNTS} == pytest.approx(c)
+        assert isinstance(entry["face_cells"], int) and c["face_cells"] > 0
         for metric, (num, den) in RATIOS.items():
             expected = c[num] / c[den] if c[den] else float("nan")
             assert entry[metric] == pytest.approx(expected, nan_ok=True), metric
@@ -261,3 +273,37 @@ def test_bad_input_is_named():
         wall_shape(np.zeros((3, 3)), 0.05)
     with pytest.raises(InputError, match="resolution"):
         wall_shape(np.zeros((3, 3), bool), 0.0)
+
+
+def test_face_offset_measures_how_far_the_maps_walls_sit_from_the_observed_face():
+    """A wall face seen by the held-out scans: a map with its lethal cells on the face scores 0, one moved a cell
+    back 1, one without walls the cap; against the face mask found by brute force."""
+    from crfmap.assess.navigation import FACE_CAP, held_out_face
+
+    h, w = 20, 24
+    zeros = np.zeros((h, w), int)
+    second_hits, second_passes = zeros.copy(), zeros.copy()
+    second_passes[:, :10] = 3  # the robot's side, free
+    second_hits[:, 10:12] = 2  # a two-cell-thick wall; its face is column 10
+    sp = ScanSplit(second_hits.copy(), second_passes.copy(), second_hits, second_passes, resolution=0.05)
+    occupied, free = sp.labels(), sp.group("all") & ~sp.labels()
+    brute = np.zeros((h, w), bool)
+    for y in range(h):
+        for x in range(w):
+            brute[y, x] = occupied[y, x] and any(0 <= y + dy < h and 0 <= x + dx < w and free[y + dy, x + dx]
+                                                 for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)))
+    assert np.array_equal(held_out_face(sp), brute) and brute[:, 10].all() and brute.sum() == h
+
+    def lethal_at(column):
+        p = np.full((h, w), 0.5)
+        p[:, :10] = 0.05
+        if column is not None:
+            p[:, column] = 0.95
+        return p
+
+    got = nav_scores(sp, {"raw": lethal_at(10), "back": lethal_at(11), "far": lethal_at(20), "none": lethal_at(None)},
+                     n_boot=20, block=5)
+    assert got["raw"]["all"]["face_offset"] == 0.0
+    assert got["back"]["all"]["face_offset"] == 1.0 and got["back"]["all"]["face_offset_diff_ci"] == (1.0, 1.0)
+    assert got["far"]["all"]["face_offset"] == got["none"]["all"]["face_offset"] == FACE_CAP
+    assert got["raw"]["all"]["face_cells"] == h and got["back"]["all"]["face_offset_cells"] == float(h)

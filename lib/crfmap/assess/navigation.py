@@ -24,9 +24,15 @@ first half, :data:`crfmap.assess.scansplit.GROUPS`):
   called lethal, over such cells;
 - ``free_error``: held-out occupied cells among the held-out observed cells called free (in the
   ``unseen`` group: how often a never-observed cell the map turned free is a wall);
+- ``face_offset`` (where the wall face the robot sees is): over the held-out *face* cells (held-out occupied
+  cells with a held-out free cell beside them: the face the scans saw), the mean distance [cells] to the
+  map's nearest lethal cell, capped at :data:`FACE_CAP` (a face farther than that is a missed wall, which
+  ``lethal_recall`` counts). A map whose lethal cells sit on the observed face scores near 0; a wall
+  moved one cell back scores about 1;
 - ``auc`` and ``nll`` by scikit-learn's ``roc_auc_score`` and ``log_loss`` (P clipped to
   :data:`crfmap.assess.scansplit.LOG_FLOOR`, so the NLL is the scan split's log-loss);
-- counts: ``occupied``, ``lethal``, ``misses``, ``far_misses``, ``ghost_candidates``, ``ghosts``, ``free``.
+- counts: ``occupied``, ``lethal``, ``misses``, ``far_misses``, ``ghost_candidates``, ``ghosts``, ``free``,
+  ``face_cells`` (and ``face_offset_cells``, the sum of their capped distances).
 
 Each ratio gets a 95 % interval and the interval of its paired difference to the ``reference`` row
 (the raw grid) from the scan split's spatial-block bootstrap: the resamples of
@@ -64,15 +70,17 @@ from crfmap.io.nav2_values import nav2_values
 
 COVER_RADIUS = 0.5  # [m] a dangerous miss farther than this from every lethal cell is a hole inflation leaves open
 GHOST_PASSES = 2  # a held-out free cell passed at least this often and never hit: a lethal call there is a ghost
+FACE_CAP = 3.0  # [cells] a held-out wall face farther than this from every lethal cell counts this far (a miss)
 NAV_METRICS = ("lethal_recall", "lethal_precision", "miss_rate", "far_miss_rate", "far_miss_share", "unknown_rate",
-               "ghost_rate", "free_error", "auc", "nll")
+               "ghost_rate", "free_error", "face_offset", "auc", "nll")
 # each ratio as (numerator, denominator) of per-cell counts; the bootstrap resamples both as block sums
 RATIOS = {"lethal_recall": ("lethal_hits", "occupied"), "lethal_precision": ("lethal_hits", "lethal"),
           "miss_rate": ("misses", "occupied"), "far_miss_rate": ("far_misses", "occupied"),
           "far_miss_share": ("far_misses", "misses"), "unknown_rate": ("unknown_walls", "occupied"),
-          "ghost_rate": ("ghosts", "ghost_candidates"), "free_error": ("misses", "free")}
+          "ghost_rate": ("ghosts", "ghost_candidates"), "free_error": ("misses", "free"),
+          "face_offset": ("face_offset_cells", "face_cells")}
 COUNTS = ("occupied", "lethal", "lethal_hits", "misses", "far_misses", "unknown_walls", "ghost_candidates", "ghosts",
-          "free")
+          "free", "face_cells", "face_offset_cells")
 MAP_METRICS = ("unknown_free", "unknown_free_observed", "unknown_free_occupied", "lethal_cells", "skeleton_m",
                "thickness", "components", "components_per_10m")
 
@@ -160,9 +168,25 @@ def cell_counts(split: ScanSplit, lethal, free, far) -> dict:
     occupied = split.labels()
     candidates = observed & (split.second_passes >= GHOST_PASSES) & (split.second_hits == 0)
     unknown = ~lethal & ~free
+    face = held_out_face(split)
+    offset = np.minimum(ndimage.distance_transform_edt(~lethal), FACE_CAP) if lethal.any() else FACE_CAP
     return {"occupied": occupied, "lethal": lethal & observed, "lethal_hits": lethal & occupied,
             "misses": free & occupied, "far_misses": free & occupied & far, "unknown_walls": unknown & occupied,
-            "ghost_candidates": candidates, "ghosts": candidates & lethal, "free": free & observed}
+            "ghost_candidates": candidates, "ghosts": candidates & lethal, "free": free & observed,
+            "face_cells": face, "face_offset_cells": np.where(face, offset, 0.0)}
+
+
+def held_out_face(split: ScanSplit) -> np.ndarray:
+    """Boolean [y, x]: held-out occupied cells with a held-out free cell among their four side neighbours.
+
+    >>> from crfmap.assess.scansplit import ScanSplit
+    >>> z = np.zeros((1, 4), int)
+    >>> held_out_face(ScanSplit(z, z, np.array([[0, 2, 2, 0]]), np.array([[3, 0, 0, 0]]))).tolist()
+    [[False, True, False, False]]
+    """
+    occupied = split.labels()
+    free = split.group("all") & ~occupied
+    return occupied & ndimage.binary_dilation(free, structure=ndimage.generate_binary_structure(2, 1))
 
 
 def _ratio(num, den):
@@ -231,7 +255,7 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
             sums = np.stack([np.bincount(r.inverse, weights=indicators[c][r.mask], minlength=r.n_blocks)
                              for c in COUNTS]).reshape(len(COUNTS), r.n_blocks)
             totals = sums.sum(axis=1)
-            entry = {c: int(round(t)) for c, t in zip(COUNTS, totals)}
+            entry = {c: (float(t) if c == "face_offset_cells" else int(round(t))) for c, t in zip(COUNTS, totals)}
             total = dict(zip(COUNTS, totals))
             for m, (num, den) in RATIOS.items():
                 entry[m] = float(_ratio(total[num], total[den]))
@@ -265,5 +289,5 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
     return out
 
 
-__all__ = ["COVER_RADIUS", "GHOST_PASSES", "NAV_METRICS", "MAP_METRICS", "nav2_classes",
-           "skeleton_length", "wall_shape", "cell_counts", "nav_scores"]
+__all__ = ["COVER_RADIUS", "GHOST_PASSES", "FACE_CAP", "NAV_METRICS", "MAP_METRICS", "nav2_classes",
+           "skeleton_length", "wall_shape", "cell_counts", "held_out_face", "nav_scores"]

@@ -20,6 +20,7 @@ is one :class:`Verdict`, its numbers beside it):
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 
@@ -138,7 +139,17 @@ def recording_goals(summary: dict) -> list:
     met = None if not wins or None in wins else all(wins)
     out.append(Verdict("1c", "Brier better than the calibrated independent-cell model on the harder splits", met,
                        f"won {sum(bool(w) for w in wins)} of {len(wins)}; " + "; ".join(parts)))
-    nav = summary["nav"]
+    out.extend(navigation_verdicts(summary["nav"]))
+    out.append(_localisation_verdict(summary["localisation"]))
+    out.extend(_peer_verdicts(summary))
+    return out
+
+
+def navigation_verdicts(nav: dict) -> list:
+    """Goals 2-5 (dangerous misses, ghosts, lethal precision and recall, wall shape and face) off nav2's reading of
+    the default and the raw grid on one split: ``{"raw": entry, DEFAULT_PRESET: entry}`` as
+    :func:`crfstudy.experiments.nav_goals.score_recording` keeps them (``summary["nav"]``)."""
+    out = []
     out.append(_nav_verdict("2a", "dangerous misses (seen cells) no more than raw", nav, "seen", "miss_rate",
                             "no worse", True))
     out.append(_nav_verdict("2b", "dangerous misses (never-seen cells) no more than raw", nav, "unseen", "miss_rate",
@@ -153,8 +164,10 @@ def recording_goals(summary: dict) -> list:
     out.append(Verdict("5b", "fewer lethal components per 10 m than raw", bool(d["components_per_10m"]
                        < r["components_per_10m"]) if _finite(d["components_per_10m"], r["components_per_10m"]) else None,
                        f"components per 10 m {d['components_per_10m']:.2f} vs raw {r['components_per_10m']:.2f}"))
-    out.append(_localisation_verdict(summary["localisation"]))
-    out.extend(_peer_verdicts(summary))
+    if "face_offset" in nav[DEFAULT_PRESET]["all"]:  # scored since the face measure exists
+        out.append(_nav_verdict("5c", "the wall face the robot saw stays where it was observed (held-out face cells' "
+                                "distance to the nearest lethal cell no more than raw's)", nav, "all", "face_offset",
+                                "no worse", True, digits=3))
     return out
 
 
@@ -264,6 +277,38 @@ def goal_matrix(columns: dict) -> tuple:
     return header, rows
 
 
+def harder_verdicts(summary: dict) -> dict:
+    """{harder split: [Verdict]} of goals 2-5 on each harder split a summary scored nav2's reading on ({} if none)."""
+    return {kind: navigation_verdicts(h["nav"]) for kind, h in (summary.get("harder") or {}).items() if "nav" in h}
+
+
+def harder_matrix(summaries: dict) -> tuple:
+    """(header, rows): goals 2-5 per recording on the harder splits (``{recording: summary}``).
+
+    A cell says ``met`` / ``met*`` on every split, or ``missed: <split> <sub-goals>; ...``.
+    """
+    by_recording = {name: harder_verdicts(s) for name, s in summaries.items()}
+    header, rows = ["goal (harder splits)"] + list(by_recording), []
+    for number in ("2", "3", "4", "5"):
+        row = [f"{number} {GOALS[number]}"]
+        for splits in by_recording.values():
+            missed, statuses = [], []
+            for kind, verdicts in splits.items():
+                mine = [v for v in verdicts if v.goal.rstrip("abcd") == number]
+                statuses += [v.status for v in mine]
+                bad = [v.goal for v in mine if v.status in (MISSED, NOT_SCORED)]
+                if bad:
+                    missed.append(f"{kind} {', '.join(bad)}")
+            if not statuses:
+                row.append(NOT_SCORED)
+            elif missed:
+                row.append("missed: " + "; ".join(missed))
+            else:
+                row.append(MET_INTERVAL if MET_INTERVAL in statuses else MET)
+        rows.append(row)
+    return header, rows
+
+
 def goal_details(columns: dict) -> tuple:
     """(header, rows): every sub-goal of every column with its verdict and the numbers that decide it."""
     rows = [[name, v.goal, v.what, v.status, v.evidence] for name, verdicts in columns.items() for v in verdicts]
@@ -272,8 +317,9 @@ def goal_details(columns: dict) -> tuple:
 
 def example_summary() -> dict:
     """A hand-made summary of one recording (the doctest's and the tests' starting point)."""
-    def nav(miss_seen, miss_unseen, ghost, precision, recall, thickness, components):
-        group = {"miss_rate": miss_seen, "ghost_rate": ghost, "lethal_precision": precision, "lethal_recall": recall}
+    def nav(miss_seen, miss_unseen, ghost, precision, recall, thickness, components, face=0.4):
+        group = {"miss_rate": miss_seen, "ghost_rate": ghost, "lethal_precision": precision, "lethal_recall": recall,
+                 "face_offset": face}
         return {"all": dict(group), "seen": dict(group), "unseen": dict(group, miss_rate=miss_unseen),
                 "map": {"thickness": thickness, "components_per_10m": components}}
 
@@ -293,12 +339,14 @@ def example_summary() -> dict:
     return {"brier_vs_certainty": {"diff": 0.0002, "ci": [-0.0001, 0.0005]},
             "ece": {DEFAULT_PRESET: 0.010, OLD_DEFAULT: 0.012, "raw": 0.08},
             "ece_vs_certainty": {"diff": -0.002, "ci": [-0.004, 0.0005]},
-            "harder": {"temporal halves": {"opponent": "isotonic on x", "diff": 0.002, "ci": [0.001, 0.003]},
-                       "scan blocks": {"opponent": "isotonic on x", "diff": -0.001, "ci": [-0.002, -0.0005]}},
+            "harder": {"temporal halves": {"opponent": "isotonic on x", "diff": 0.002, "ci": [0.001, 0.003],
+                                           "nav": copy.deepcopy(rows)},
+                       "scan blocks": {"opponent": "isotonic on x", "diff": -0.001, "ci": [-0.002, -0.0005],
+                                       "nav": copy.deepcopy(rows)}},
             "nav": rows, "localisation": loc,
             "nav_vs_default": {"octomap": {"lethal_recall_diff": 0.04, "lethal_recall_diff_ci": [-0.01, 0.09]},
                                "raw": {"lethal_recall_diff": -0.06, "lethal_recall_diff_ci": [-0.07, -0.05]}}}
 
 
 __all__ = ["OLD_DEFAULT", "MET", "MET_INTERVAL", "MISSED", "NOT_SCORED", "LEGEND", "GOALS", "Verdict", "no_worse",
-           "better", "recording_goals", "closed_loop_goals", "goal_matrix", "goal_details", "example_summary"]
+           "better", "recording_goals", "navigation_verdicts", "harder_verdicts", "harder_matrix", "closed_loop_goals", "goal_matrix", "goal_details", "example_summary"]

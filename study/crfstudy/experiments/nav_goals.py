@@ -30,7 +30,7 @@ from crfmap.assess.peers import PEERS
 from crfmap.crf.presets import DEFAULT_PRESET
 from crfmap.errors import InputError
 from crfstudy.experiments.goal_rules import (LEGEND, OLD_DEFAULT, closed_loop_goals, goal_details, goal_matrix,
-                                             recording_goals)
+                                             harder_matrix, recording_goals)
 
 RECORDINGS = {  # name: file under crfmap.data.data_root(); the names notebook 10 uses
     "intel": "carmen/intel-corrected.log.gz", "aces": "carmen/aces-corrected.log.gz",
@@ -93,6 +93,7 @@ def harder_scores(scans, settings: GoalSettings, calibrators: dict) -> dict:
     lower Brier on all cells there, ``diff`` / ``ci`` the default minus it (paired interval), ``groups`` the same
     for the cells the map had seen and those it had not: {group: {"diff", "ci"}}.
     """
+    from crfmap.assess.navigation import nav_scores
     from crfmap.assess.scansplit import GROUPS, score
     from crfmap.assess.splits import harder_splits
     from crfmap.crf.presets import get_preset
@@ -101,8 +102,9 @@ def harder_scores(scans, settings: GoalSettings, calibrators: dict) -> dict:
     for kind, sp in harder_splits(scans, settings.resolution, block=settings.split_block,
                                   tile=settings.split_tile).items():
         preds = {"raw": sp.raw_probability()}
-        preds.update({name: get_preset(name).refine(hits=sp.first_hits, passes=sp.first_passes).beliefs.probability
-                      for name in (OLD_DEFAULT, DEFAULT_PRESET)})
+        results = {name: get_preset(name).refine(hits=sp.first_hits, passes=sp.first_passes)
+                   for name in (OLD_DEFAULT, DEFAULT_PRESET)}
+        preds.update({name: r.beliefs.probability for name, r in results.items()})
         preds.update({name: _calibrated(model, sp) for name, model in calibrators.items()})
         s = score(sp, preds, n_boot=settings.n_boot, block=settings.block, seed=settings.seed,
                   reference=DEFAULT_PRESET, metrics=("brier",))
@@ -114,12 +116,16 @@ def harder_scores(scans, settings: GoalSettings, calibrators: dict) -> dict:
             ci = entry.get("brier_diff_ci")
             groups[group] = {"diff": -entry["brier_diff"], "ci": None if ci is None else [-ci[1], -ci[0]],
                              "cells": entry["cells"]}
-        out[kind] = {"brier": brier, "opponent": opponent, **groups["all"], "groups": groups}
+        # goals 2-5 on this split too: nav2's reading of the default's map against the raw grid's, same resamples
+        nav = nav_scores(sp, {"raw": preds["raw"], DEFAULT_PRESET: results[DEFAULT_PRESET].nav2_map.probability},
+                         n_boot=settings.n_boot, block=settings.block, seed=settings.seed)
+        out[kind] = {"brier": brier, "opponent": opponent, **groups["all"], "groups": groups,
+                     "nav": {name: _nav_entry(entry) for name, entry in nav.items()}}
     return out
 
 
 def _nav_entry(nav: dict) -> dict:
-    keep = ("lethal_recall", "lethal_precision", "miss_rate", "far_miss_rate", "ghost_rate")
+    keep = ("lethal_recall", "lethal_precision", "miss_rate", "far_miss_rate", "ghost_rate", "face_offset")
     out = {}
     for group in ("all", "seen", "unseen"):
         g = nav[group]
@@ -287,12 +293,13 @@ def main(argv=None) -> int:
             raise InputError("RECORDING", f"unknown {', '.join(unknown)}; known: {', '.join(RECORDINGS)}")
         files = {name: data_file(RECORDINGS[name]) for name in names}
         training = data_file(RECORDINGS[TRAINING]) if have_data(RECORDINGS[TRAINING]) else None
-        _, _, columns = run(files, settings, training=training)
+        summaries, _, columns = run(files, settings, training=training)
     except InputError as e:  # an unknown recording, the data missing
         print(f"nav goals: {e}", file=sys.stderr)
         return 2
     print(markdown_table(*goal_matrix(columns)))
     print(LEGEND + "\n")
+    print(markdown_table(*harder_matrix(summaries)) + "\n")
     print(markdown_table(*goal_details(columns)))
     print(f"{'quick' if args.quick else 'full'} settings, {time.perf_counter() - started:.0f} s")
     return 0

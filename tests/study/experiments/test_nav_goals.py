@@ -25,7 +25,7 @@ def _status(summary, goal):
 def test_the_example_summary_gives_the_verdicts_worked_out_by_hand():
     got = {v.goal: v.status for v in gr.recording_goals(gr.example_summary())}
     assert got == {"1a": "met*", "1b": "met", "1c": "missed", "2a": "met", "2b": "met", "3": "met", "4a": "met",
-                   "4b": "met", "5a": "met", "5b": "met", "6": "met*", "8a": "missed", "8b": "met", "8c": "met",
+                   "4b": "met", "5a": "met", "5b": "met", "5c": "met", "6": "met*", "8a": "missed", "8b": "met", "8c": "met",
                    "8d": "met*"}
 
 
@@ -82,6 +82,8 @@ def _with(path, value):
     (("nav", D, "map", "thickness"), 2.2001, "5a", "missed"),
     (("nav", D, "map", "components_per_10m"), 9.0, "5b", "missed"),  # as many as raw is not fewer
     (("nav", D, "map", "components_per_10m"), float("nan"), "5b", "n/a"),
+    (("nav", D, "all", "face_offset_diff_ci"), [1e-9, 0.2], "5c", "missed"),  # the face moved back, shown
+    (("nav", D, "all", "face_offset_diff"), 0.1, "5c", "met*"),  # worse point, interval [0, 0] reaches no difference
     (("localisation", D, "rotation_error_diff_ci"), [1e-9, 0.2], "6", "missed"),  # worse on one measure
     (("localisation", D, "found_diff_ci"), [0.0, 0.05], "6", "met*"),
     (("nav", D, "all", "miss_rate"), 0.03, "8a", "met"),  # a tie with the best peer is best
@@ -134,7 +136,19 @@ def test_the_matrix_names_what_was_missed_and_marks_interval_only_goals():
     assert by_goal["5"] == ["met", "n/a"] and by_goal["7"] == ["n/a", "missed: 7c"]
     assert by_goal["8"] == ["missed: 8a", "n/a"]
     _, details = gr.goal_details(columns)
-    assert len(details) == 15 + 3 and details[0][:4] == ["x", "1a", details[0][2], "met*"]
+    assert len(details) == 16 + 3 and details[0][:4] == ["x", "1a", details[0][2], "met*"]
+
+
+def test_harder_matrix_names_the_split_and_sub_goal_missed():
+    summary = gr.example_summary()
+    header, rows = gr.harder_matrix({"x": summary})
+    assert header == ["goal (harder splits)", "x"] and [r[1] for r in rows] == ["met", "met", "met", "met"]
+    blocks = summary["harder"]["scan blocks"]["nav"][D]["all"]
+    blocks["ghost_rate_diff_ci"] = [0.001, 0.02]  # more ghosts than raw there, shown
+    _, rows = gr.harder_matrix({"x": summary})
+    assert rows[1] == [f"3 {gr.GOALS['3']}", "missed: scan blocks 3"] and rows[0][1] == "met"
+    del summary["harder"]  # a summary without harder splits: nothing scored
+    assert gr.harder_matrix({"x": summary})[1][0][1] == gr.NOT_SCORED
 
 
 def _line_log(path, n_scans=24, seed=0):
@@ -169,7 +183,7 @@ def test_a_tiny_run_end_to_end_agrees_with_the_library(tmp_path):
     log = _line_log(tmp_path / "room.log")
     summaries, records, columns = ng.run({"room": log}, TINY, progress=False)
     assert list(columns) == ["room", "closed loop", "closed loop (refined on arrival)"]
-    assert [v.goal for v in columns["room"]] == ["1a", "1b", "1c", "2a", "2b", "3", "4a", "4b", "5a", "5b", "6",
+    assert [v.goal for v in columns["room"]] == ["1a", "1b", "1c", "2a", "2b", "3", "4a", "4b", "5a", "5b", "5c", "6",
                                                 "8a", "8b", "8c", "8d"]
     assert [v.goal for v in columns["closed loop"]] == ["7a", "7b", "7c"] and {r["scene"] for r in records} == {
         "enclosed-train"}
