@@ -234,3 +234,21 @@ def test_bad_grids_are_named(bad, word):
 def test_initial_messages_are_uniform():
     m = initial_messages((2, 3))
     assert m.shape == (4, 2, 3) and np.all(m == 0.5)
+
+
+def test_cells_a_hair_from_certain_are_read_at_the_floor_and_said_so():
+    """P in (0, MESSAGE_FLOOR) or (1 - MESSAGE_FLOOR, 1) is LBP's on the clipped grid, with one warning naming the
+    count; exactly 0 or 1 is hard evidence, and ordinary grids are silent."""
+    import warnings
+
+    from crfmap.crf.engine.messages import MESSAGE_FLOOR
+
+    p = np.array([[1.0, 1e-310, 0.5, 0.3], [0.2, 0.5, 1 - 1e-12, 0.0]])
+    clipped = np.where((p > 0) & (p < 1), np.clip(p, MESSAGE_FLOOR, 1 - MESSAGE_FLOOR), p)
+    with pytest.warns(UserWarning, match=r"grid: 2 cell\(s\) have P within 1e-06 of 0 or 1"):
+        got = infer(p, max_iter=200, tol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # neither the clipped grid nor hard evidence warns
+        want = infer(clipped, max_iter=200, tol=1e-12)
+        infer(np.array([[0.0, 0.4, 1.0]]), max_iter=5)
+    np.testing.assert_allclose(got.beliefs.probability, want.beliefs.probability, rtol=0, atol=1e-12)

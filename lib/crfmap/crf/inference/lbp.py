@@ -25,6 +25,8 @@ region never influence anything unless they sent messages before.
 from __future__ import annotations
 
 import time
+import warnings
+
 import numpy as np
 
 from crfmap.checks import check_number
@@ -82,6 +84,28 @@ def check_float_dtype(dtype) -> np.dtype:
     if checked is None or checked not in (np.dtype(np.float32), np.dtype(np.float64)):  # (dtype == None is True)
         raise InputError("dtype", f"must be np.float32 or np.float64, got {dtype!r}")
     return checked
+
+
+def warn_near_certain(probability, name: str = "grid") -> int:
+    """Warn (once per call) when cells have P within :data:`MESSAGE_FLOOR` of 0 or 1 without being 0 or 1; their count.
+
+    LBP keeps observations in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR] (float32's range; :mod:`crfmap.crf.engine.messages`),
+    so such a cell is read as MESSAGE_FLOOR away from certain: the result is LBP's on the clipped grid, which under a
+    strong coupling can differ from the unclipped model's by far more than the floor. Exactly 0 or 1 is hard
+    evidence and is exact. Costs a min and a max on the common grid (0.7 ms on 1.5 M cells).
+
+    >>> warn_near_certain(np.array([[0.0, 0.3, 1.0]]))
+    0
+    """
+    p = np.asarray(probability)
+    if p.size == 0 or (p.min() >= MESSAGE_FLOOR and p.max() <= 1 - MESSAGE_FLOOR):
+        return 0
+    near = int(np.count_nonzero(((p > 0) & (p < MESSAGE_FLOOR)) | ((p > 1 - MESSAGE_FLOOR) & (p < 1))))
+    if near:
+        warnings.warn(f"{name}: {near} cell(s) have P within {MESSAGE_FLOOR:g} of 0 or 1 without being 0 or 1; LBP "
+                      f"reads them as {MESSAGE_FLOOR:g} from certain (give exactly 0 or 1 for hard evidence)",
+                      stacklevel=3)
+    return near
 
 
 def infer(
@@ -173,6 +197,7 @@ def infer(
     fused = use_fast and init == "uniform" and engine.fused_start_applies(
         grid.probability if given else grid, tables, max_iter, block, region, messages)
     g = result_grid(_BARE_GRID, grid) if fused and not given else as_grid(grid)
+    warn_near_certain(g.probability)
     coarse_seconds = None
     if init == "coarse":
         t0 = time.perf_counter()
