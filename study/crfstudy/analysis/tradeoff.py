@@ -1,12 +1,14 @@
 """The default's trade-off curves (issue 38): what one setting of the gated preset buys on one goal and costs on another.
 
 Issue 38 asks, where a goal cannot be met without losing another, for the measured trade-off as one setting moves.
-Two settings move here, one at a time, every other constant the default's:
+Three settings move here (:data:`SETTINGS`), one at a time, every other constant the default's:
 
 - the coupling J (:data:`COUPLINGS`, the gate search's grid): a stronger coupling calibrates the beliefs better
   (ECE, goal 1b) but lets LBP call more lone returns lethal (ghosts, goal 3);
 - the gate's ``free_evidence`` (:data:`FREE_EVIDENCE`): the net passes a cell needs before nav2 may read it free.
-  Fewer passes free more cells (faster exploration, goal 7a) and open more held-out walls (dangerous misses, goal 2).
+  Fewer passes free more cells (faster exploration, goal 7a) and open more held-out walls (dangerous misses, goal 2);
+- the gate's ``lethal_evidence`` (:data:`LETHAL_EVIDENCE`): the net hits that keep a cell lethal whatever its
+  neighbours say. Fewer keep more lone returns (ghosts, goal 3) and more of the face the robot saw (goal 5c).
 
 Each setting is scored on every recording's even / odd scan split (:data:`crfstudy.experiments.nav_goals.RECORDINGS`)
 with the goal table's rules (:mod:`crfstudy.experiments.goal_rules`): the paired 95 % spatial-block intervals of
@@ -29,11 +31,13 @@ from crfmap.crf.presets import DEFAULT_PRESET, coupling_table, get_preset
 from crfstudy.experiments.goal_rules import OLD_DEFAULT, better, no_worse
 
 COUPLINGS = (0.25, 0.30, 0.33, 0.35)  # J: the gate search's grid (0.35: the certainty preset's, on the Bethe point)
+LETHAL_EVIDENCE = (1, 2, 3)  # net hits that keep a cell lethal (2: the default; 1: every net hit, no ghost removal)
 FREE_EVIDENCE = (1, 2, 3, 4)  # net passes before a cell may read free (2: the default; 1: what the raw grid needs at 0.196)
 # (goal, measure, group, lower is better, rule): the sub-goals a setting moves, as the goal table decides them
 SUBGOALS = (("1a", "brier", "all", True, "no worse"), ("1b", "ece", "all", True, "no worse"),
             ("2a", "miss_rate", "seen", True, "no worse"), ("3", "ghost_rate", "all", True, "better"),
-            ("4a", "lethal_precision", "all", False, "no worse"), ("4b", "lethal_recall", "all", False, "better"))
+            ("4a", "lethal_precision", "all", False, "no worse"), ("4b", "lethal_recall", "all", False, "better"),
+            ("5c", "face_offset", "all", True, "no worse"))
 
 
 def variants(setting: str) -> dict:
@@ -45,9 +49,10 @@ def variants(setting: str) -> dict:
     base = get_preset(DEFAULT_PRESET)
     if setting == "J":
         return {f"J {j:.2f}": replace(base, hidden=coupling_table(j)) for j in COUPLINGS}
-    if setting == "free_evidence":
-        return {f"free_evidence {n}": replace(base, gate=replace(base.gate, free_evidence=n)) for n in FREE_EVIDENCE}
-    raise ValueError(f"setting must be 'J' or 'free_evidence', got {setting!r}")
+    if setting in ("free_evidence", "lethal_evidence"):
+        grid = FREE_EVIDENCE if setting == "free_evidence" else LETHAL_EVIDENCE
+        return {f"{setting} {n}": replace(base, gate=replace(base.gate, **{setting: n})) for n in grid}
+    raise ValueError(f"setting must be 'J', 'free_evidence' or 'lethal_evidence', got {setting!r}")
 
 
 def score_variants(split, presets: dict, n_boot: int = 200, block: int = 16, seed: int = 0) -> dict:
@@ -109,6 +114,7 @@ def tradeoff_table(scores: dict) -> tuple:
     return header, rows
 
 
+SETTINGS = ("J", "free_evidence", "lethal_evidence")  # what variants() moves, one at a time
 CLOSED_LOOP_KINDS = ("online-crf", "refined-on-arrival")  # the onboard maps that run the default preset
 
 
@@ -195,7 +201,7 @@ def main(argv=None) -> int:
     if unknown:
         parser.error(f"unknown recording(s) {', '.join(unknown)}; known: {', '.join(RECORDINGS)}")
     files = {name: data_file(RECORDINGS[name]) for name in (args.recordings or RECORDINGS)}
-    for setting in ("J", "free_evidence"):
+    for setting in SETTINGS:
         header, rows = tradeoff_table(run(files, setting, n_boot=args.boot))
         print(f"\n{setting}: sub-goals met on {len(files)} recordings (mean difference)\n")
         print(tabulate(rows, header, tablefmt="github"))

@@ -65,3 +65,11 @@ def test_closed_loop_table_pairs_every_kind_with_the_reference_scene_by_scene():
     header, rows = tradeoff.closed_loop_table(records, n_boot=200)
     assert [r[0] for r in rows] == ["raw", "crf"] and rows[0][1] == "70"
     assert rows[1][1] == "75 (+5 [+5, +5])"  # every scene 5 scans more: the interval is the point
+
+
+def test_lethal_evidence_variants_move_only_that_field():
+    default = get_preset(DEFAULT_PRESET)
+    got = tradeoff.variants("lethal_evidence")
+    assert [p.gate.lethal_evidence for p in got.values()] == list(tradeoff.LETHAL_EVIDENCE)
+    assert all(p.gate.free_evidence == default.gate.free_evidence for p in got.values())
+    assert set(tradeoff.SETTINGS) == {"J", "free_evidence", "lethal_evidence"}
