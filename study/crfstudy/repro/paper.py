@@ -211,7 +211,17 @@ def cell_words(table_text: str) -> str:
     >>> cell_words("| method | metric | precision |\\n|---|---|---|\\n| all free | recall_seen | nan [nan, nan] |")
     '| method | metric | precision |\\n|---|---|---|\\n| all free | recall (seen cells) | n/a |'
     """
-    return _whole_cells(table_text, CELL_WORDS)
+    return _literal_dashes(_whole_cells(table_text, CELL_WORDS))
+
+
+def _literal_dashes(table_text: str) -> str:
+    """Table rows with "--" escaped: pandoc's typography printed a command's "--no-deps" with an en dash.
+
+    >>> _literal_dashes("| note |\\n|---|\\n| pip install --no-deps x |")
+    '| note |\\n|---|\\n| pip install \\\\-\\\\-no-deps x |'
+    """
+    return "\n".join(line if not line.startswith("|") or _TABLE_RULE.fullmatch(line) else line.replace("--", r"\-\-")
+                     for line in table_text.split("\n"))
 
 
 def attach_caption(table_text: str) -> str:
