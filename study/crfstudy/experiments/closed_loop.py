@@ -123,25 +123,37 @@ def per_scene_table(records, metrics=("scans", "collisions", "plans_into_walls",
 
 
 def run_figure(scene, runs, title=""):
-    """One scene: the truth with every kind's path, then each kind's final map with its path."""
+    """One scene: the truth with every kind's path, then each kind's final map with its path.
+
+    Three panels a row (the truth and four maps in one row were too small to read at the page's width); a spare
+    panel holds the paths' legend.
+    """
     import matplotlib.pyplot as plt
 
-    kinds = list(runs)
-    fig, axes = plt.subplots(1, len(kinds) + 1, figsize=(3.2 * (len(kinds) + 1), 3.2), constrained_layout=True)
+    panels = len(runs) + 1
+    ncols = min(3, panels)
+    nrows = -(-panels // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.4 * ncols, 3.1 * nrows), squeeze=False, layout="constrained")
+    axes = axes.flat
     extent = scene.truth.imshow_extent()
     axes[0].imshow(scene.truth.probability, origin="lower", cmap="gray_r", extent=extent, vmin=0, vmax=1)
     for kind, run in runs.items():
         axes[0].plot(run.path[:, 0], run.path[:, 1], lw=0.8, label=kind)
-    axes[0].legend(fontsize=6, loc="upper right")
-    axes[0].set_title(f"truth and paths {title}".strip(), fontsize=8)
+    axes[0].set_title(f"truth and paths {title}".strip(), fontsize=9)
     for ax, (kind, run) in zip(axes[1:], runs.items()):
         ax.imshow(run.probability, origin="lower", cmap="gray_r", extent=extent, vmin=0, vmax=1)
         ax.plot(run.path[:, 0], run.path[:, 1], color="tab:red", lw=0.8)
         ax.plot(*run.path[0], "go", ms=4)
         ax.set_title(f"{kind}: {run.stop}, {run.scans} scans\n{run.collisions} collisions, "
-                     f"{run.plans_into_walls} plans into walls", fontsize=7)
-    for ax in axes:
+                     f"{run.plans_into_walls} plans into walls", fontsize=9)
+    for ax in axes[:panels]:
         ax.set_xticks([]), ax.set_yticks([])
+    spare = axes[panels:]
+    for ax in spare:
+        ax.set_axis_off()
+    handles, labels = axes[0].get_legend_handles_labels()
+    (spare[0] if len(spare) else axes[0]).legend(handles, labels, title="paths (left panel)", fontsize=9,
+                                                 loc="center" if len(spare) else "upper right")
     return fig
 
 

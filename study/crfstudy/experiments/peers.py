@@ -169,18 +169,35 @@ def peer_sentence(label, result, peer, preset=ANALYSED):
 
 
 def reliability_figure(calibrations):
-    """One panel per recording: mean P per bin against the odd scans' occupied share, one line per method."""
-    import matplotlib.pyplot as plt
+    """One panel per recording: mean P per bin against the odd scans' occupied share, one line per method.
 
-    fig, axes = plt.subplots(1, len(calibrations), figsize=(3.6 * len(calibrations), 3.6), squeeze=False)
-    for ax, (label, calib) in zip(axes[0], calibrations.items()):
+    Three panels a row and one legend below them, each method in the same colour in every panel: six panels in one
+    row, each with its own legend, were unreadable at the page's width. The calibration errors are in the peer
+    table.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    ncols = min(3, len(calibrations))
+    nrows = -(-len(calibrations) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.4 * ncols, 3.0 * nrows + 0.7), squeeze=False,
+                             sharex=True, sharey=True, layout="constrained")
+    methods = list(dict.fromkeys(name for calib in calibrations.values() for name in calib))
+    colours = {name: f"C{i % 10}" for i, name in enumerate(methods)}
+    for ax, (label, calib) in zip(axes.flat, calibrations.items()):
         ax.plot([0, 1], [0, 1], color="0.7", lw=1)
         for name, c in calib.items():
             used = c["count"] > 0
-            ax.plot(c["mean_p"][used], c["share"][used], marker="o", ms=3, label=f"{name} ({c['ece']:.3f})")
-        ax.set_title(label); ax.set_xlabel("predicted P(occupied)"); ax.set_ylabel("observed occupied share")
-        ax.legend(fontsize=7, title="ECE", title_fontsize=7)
-    fig.tight_layout()
+            ax.plot(c["mean_p"][used], c["share"][used], marker="o", ms=3, lw=1, color=colours[name])
+        ax.set_title(label)
+    for ax in axes[-1]:
+        ax.set_xlabel("predicted P(occupied)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("observed occupied share")
+    for ax in axes.flat[len(calibrations):]:
+        ax.set_axis_off()
+    handles = [Line2D([], [], color=colours[name], marker="o", ms=3, lw=1) for name in methods]
+    fig.legend(handles, methods, loc="outside lower center", ncols=min(len(methods), 5), fontsize=8)
     return fig
 
 

@@ -36,8 +36,9 @@ def landscape_figure(landscape, strengths, biases, title):
     fig, ax = plt.subplots(figsize=(6, 4.4), layout="constrained")
     im = ax.imshow(landscape, origin="lower", cmap="viridis", aspect="auto")
     for i in range(len(strengths)):
-        for j in range(len(biases)):
-            ax.text(j, i, f"{landscape[i, j]:.3f}", ha="center", va="center", color="white", fontsize=8)
+        for j in range(len(biases)):  # dark text on viridis's bright end: white on yellow was unreadable
+            ax.text(j, i, f"{landscape[i, j]:.3f}", ha="center", va="center", fontsize=8,
+                    color="black" if im.norm(landscape[i, j]) > 0.6 else "white")
     ax.set_xticks(range(len(biases)), [str(b) for b in biases])
     ax.set_yticks(range(len(strengths)), [str(a) for a in strengths])
     ax.set_xlabel("link bias b: link [[1, 0], [0, b]]")

@@ -61,7 +61,8 @@ def data_files(root: Path | None = None) -> list:
         for f in files:
             name = f.relative_to(root).as_posix()
             if f.is_file():
-                rows.append([name, round(f.stat().st_size / 1e3), _sha256(f), origin])
+                size = f.stat().st_size  # a file under 1 kB keeps its bytes (a 137-byte map YAML read "0 kB")
+                rows.append([name, round(size / 1e3) if size >= 1e3 else size / 1e3, _sha256(f), origin])
             else:
                 rows.append([name, None, "missing", origin])
     return rows

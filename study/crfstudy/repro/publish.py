@@ -17,6 +17,7 @@ files, and Typst uses the fonts inside its wheel: :data:`TYPST_OPTIONS`).
 from __future__ import annotations
 
 import os
+import re
 from concurrent.futures import ThreadPoolExecutor, wait
 from pathlib import Path
 
@@ -38,22 +39,30 @@ TYPST_HEADER = """\
 #set par(justify: true)
 #set figure(numbering: none)
 #show figure.caption: set text(size: 8.5pt)
-// Images float to the top or bottom of a page instead of leaving the rest of a page blank, but not past the
-// next section's heading (pending floats are placed first). Tables stay in the text's order with their caption
-// above them and stuck to their first rows (a caption never ends a page alone). A table of up to 25 rows is
-// kept whole; a longer one continues on the next page, its header repeated.
-#show figure.where(kind: image): set figure(placement: auto)
+// Images float to the top of a page instead of leaving the rest of a page blank, but not past the next section's
+// heading (pending floats are placed first) nor above their own (each section's content is a block:
+// section_blocks). Top only: a float placed at a page's bottom sat under the headings that followed it on that
+// page (the closed-loop figure inside the Conclusion). A table has its caption above it, stuck to its first rows
+// (a caption never ends a page alone). A table of up to 25 rows is kept whole and, while
+// `float-tables` holds, floats like an image: kept in the text's order it left a third of a page blank whenever it
+// did not fit below the text before it. A longer table stays in the text and continues on the next page, its header
+// repeated. The appendix turns floating off (mostly figures and tables, in the text's order).
+#let float-tables = state("float-tables", true)
+#show figure.where(kind: image): set figure(placement: top)
 #show heading.where(level: 2): it => { place.flush(); it }
+#show heading.where(level: 3): it => { place.flush(); it }
 #show figure.where(kind: table): set figure.caption(position: top)
 #show figure.where(kind: table): set block(breakable: true)
 #show figure.caption.where(kind: table): it => block(sticky: true, width: 100%, it)
-#show figure.where(kind: table): it => {
+#show figure.where(kind: table): it => context {
   let t = it.body.at("body", default: none)
   let rows = if t != none and t.func() == table {
     let columns = if type(t.columns) == array { t.columns.len() } else { t.columns }
     t.children.len() / calc.max(columns, 1)
   } else { 0 }
-  if rows > 25 { it } else { block(breakable: false, it) }
+  if rows > 25 { it }
+  else if float-tables.get() { place(top, float: true, clearance: 1.2em, block(breakable: false, it)) }
+  else { block(breakable: false, it) }
 }
 #show table: set text(size: 6.5pt)
 #show table.cell: set par(justify: false)
@@ -77,11 +86,51 @@ def _pandoc(source: Path, to: str, extra: list) -> str:
     return pypandoc.convert_file(str(source), to, format="markdown", extra_args=extra)
 
 
+_SCOPED = re.compile(r"^#(?:set|show|let|import|include|pagebreak|float-tables)\b", re.M)  # rules for what follows
+
+
+def section_blocks(body: str, level: int = 2) -> str:
+    """Pandoc's Typst body with each section's content (after its heading) inside a breakable block: level-2
+    sections, and within them level-3 ones.
+
+    Why: a top float goes to the top of its region, and the page is the region of content that is not inside a
+    block: a figure of a section starting mid-page then sat above that section's heading, in the section before.
+    Inside the block its region starts below the heading. A section holding set, show or page-break rules for the
+    rest of the document (the references, which open the appendix) stays unwrapped: a block would scope them.
+
+    >>> print(section_blocks("= T\\n\\n== A\\n<a>\\ntext\\n=== A1\\nsub\\n== B\\n#set text(size: 8pt)\\nrefs\\n"))
+    = T
+    <BLANKLINE>
+    == A
+    <a>
+    #block(width: 100%, breakable: true)[
+    text
+    === A1
+    #block(width: 100%, breakable: true)[
+    sub
+    ]
+    ]
+    == B
+    #set text(size: 8pt)
+    refs
+    <BLANKLINE>
+    """
+    heading = re.compile(rf"^({'=' * level} .*\n(?:<[^>\n]*>\n)?)", re.M)  # a heading and its label line
+    parts = heading.split(body)  # [before the first heading, heading, content, heading, content, ...]
+    out = [parts[0]]
+    for head, content in zip(parts[1::2], parts[2::2]):
+        if level < 3:
+            content = section_blocks(content, level + 1)
+        wrap = content.strip() and not _SCOPED.search(content)
+        out.append(head + (f"#block(width: 100%, breakable: true)[\n{content.rstrip()}\n]\n" if wrap else content))
+    return "".join(out)
+
+
 def to_typst(markdown_path: Path) -> str:
     """The Typst source of a rendered report (images referenced by path, relative to it)."""
     markdown_path = Path(markdown_path)
     body = _pandoc(markdown_path, "typst", ["--wrap=none", "--columns=10000"])  # tables: natural widths
-    return TYPST_HEADER + "\n" + body
+    return TYPST_HEADER + "\n" + section_blocks(body)
 
 
 def to_html(markdown_path: Path, css_path: Path) -> str:

@@ -94,12 +94,14 @@ def format_cell(value, digits: int = 4) -> str:
 
 
 def escape_cell(text: str) -> str:
-    """A cell's text safe inside a Markdown table row: a raw "|" would end the cell, a newline the row.
+    """A cell's text safe inside a Markdown table row: a raw "|" would end the cell, a newline the row, and a lone
+    backslash is Markdown's escape ("learned on \\ scored on" printed without its backslash).
 
-    >>> escape_cell("P(occ | N = 0.8)")
-    'P(occ \\\\| N = 0.8)'
+    >>> escape_cell("P(occ | N = 0.8)"), escape_cell("learned on \\\\ scored on")
+    ('P(occ \\\\| N = 0.8)', 'learned on \\\\\\\\ scored on')
     """
-    return re.sub(r"(?<!\\)\|", r"\\|", str(text)).replace("\n", " ")
+    text = re.sub(r"\\(?!\|)", r"\\\\", str(text))  # a backslash not escaping a bar (that one is kept)
+    return re.sub(r"(?<!\\)\|", r"\\|", text).replace("\n", " ")
 
 
 def markdown_table(header, rows, digits: int = 4) -> str:

@@ -121,6 +121,7 @@ def test_build_facts_describe_this_environment(tmp_path):
     (tmp_path / "carmen" / "intel-corrected.log.gz").write_bytes(b"abc")
     rows = {r[0]: r for r in buildinfo.data_files(tmp_path)}
     assert rows["carmen/intel-corrected.log.gz"][2] == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    assert rows["carmen/intel-corrected.log.gz"][1] == 0.003  # kB; a small file is not "0"
     assert rows["carmen/aces-corrected.log.gz"][2] == "missing"
 
 

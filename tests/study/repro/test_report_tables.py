@@ -35,3 +35,10 @@ def test_every_generated_table_has_one_cell_per_column():
         pytest.skip("no generated tables here (run make reproduce)")
     bad = [p.name for p in tables if len(set(cells_per_row(p.read_text()))) > 1]
     assert not bad, f"tables whose rows differ in cell count (a raw '|' in a cell?): {bad}"
+
+
+def test_pandoc_reads_a_lone_backslash_as_text():
+    pypandoc = pytest.importorskip("pypandoc")
+    text = markdown_table(["learned on \\ scored on", "x"], [["a \\| b", 1]])
+    html = pypandoc.convert_text(text, "html", format="markdown")
+    assert "learned on \\ scored on" in html and html.count("<td>") == 2
