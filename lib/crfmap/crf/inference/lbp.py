@@ -32,7 +32,7 @@ from crfmap.crf.engine import solve as engine
 from crfmap.crf.engine.messages import MESSAGE_FLOOR, check_messages
 from crfmap.crf.engine.packed import PASS_ITERATIONS, fast_tables_ok
 from crfmap.crf.inference import _plain_kernels as K
-from crfmap.crf.inference.compiling import announce_lbp, compile_timer
+from crfmap.crf.inference.compiling import announcing, compile_timer
 from crfmap.crf.inference.multiscale import COARSE_TOL_FACTOR, INITS, coarse_messages
 from crfmap.crf.inference.result import LBPResult, result_grid
 from crfmap.crf.inference.schedules import run_schedule, schedule_settings
@@ -198,12 +198,11 @@ def infer(
 
     previous_threads = numba.get_num_threads()
     n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
-    announce_lbp(use_fast, settings.name, g.probability.size, n_threads, bool(fused))
     numba.set_num_threads(n_threads)
     try:
         t0 = time.perf_counter()
         timings = {}
-        with compile_timer() as compiled:
+        with announcing(), compile_timer() as compiled:  # a compile says so as it starts
             if use_fast:
                 prob = np.ascontiguousarray(g.probability, dtype=np.float64)
                 out = engine.solve(prob, tables, link, max_iter=max_iter, tol=tol, dtype=dtype, threads=n_threads,
