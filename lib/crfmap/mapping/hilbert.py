@@ -45,8 +45,8 @@ PRIOR_VARIANCE = 10_000.0  # the authors' first prior N(0, 10^4) on every weight
 EM_ITERATIONS = 3  # closed-form rounds per batch (scan), as the authors' code
 CUTOFF = 4.0  # [length scales] features beyond are dropped (exp(-8) = 3e-4 of the peak)
 # Chosen on the Intel log only, by the certainty preset's search rule (a coordinate search by the scan-split Brier
-# score; the record: crfmap.assess.peers.HILBERT_SEARCH_INTEL, each value with grid values on either side), then fixed
-# for every recording:
+# score; the record: crfstudy.analysis.peer_search.HILBERT_SEARCH_INTEL, each value with grid values on either
+# side), then fixed for every recording:
 FEATURE_SPACING = 0.075  # [m] between RBF centres
 LENGTH_SCALE = 0.025  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2) = 800 / m^2
 FREE_SPACING = 0.05  # [m] between free points sampled along a beam

@@ -120,7 +120,7 @@ def fit_scaled(split, couplings, scales, scores=None) -> tuple:
 
 def fit_pseudolikelihood(split, steps=300):
     """(hidden, link) learned by pseudo-likelihood: raw grid of the first half, second-half labels as truth."""
-    from crfmap.assess.learning import learn_pseudolikelihood
+    from crfstudy.learning import learn_pseudolikelihood
 
     mask = split.group("all")
     truth = split.labels().astype(float)

@@ -164,7 +164,7 @@ def scan_room(kind: str, seed: int, drive=None, laser=None, range_noise=RANGE_NO
 def learn_on_room(kind: str, seed: int, steps=20, drive=None, laser=None, range_noise=RANGE_NOISE,
                   odometry_noise=ODOMETRY_NOISE):
     """The gradient learner (converged LBP, from the default tables) on one noisy training room."""
-    from crfmap.assess.learning import learn_gradient
+    from crfstudy.learning import learn_gradient
 
     scene, _, observed = scan_room(kind, seed, drive, laser, range_noise, odometry_noise)
     return learn_gradient(observed, scene.truth, steps=steps, lbp_options=TO_CONVERGENCE, progress=False)

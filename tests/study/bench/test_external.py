@@ -12,7 +12,7 @@ import pytest
 from crfmap.assess import mincut as G
 from crfstudy.bench import external as E
 from crfmap.errors import InputError
-from crfmap.crf.inference.exact import exact_marginals
+from crfstudy.references import exact_marginals
 from crfmap.crf.inference.lbp import infer
 
 KEYS = {"method", "size", "dtype", "threads", "seconds_per_iteration", "mcells_per_second"}
