@@ -12,7 +12,6 @@ import math
 import numpy as np
 
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid, check_probability_array
 
 
 def check_number(name, value, low=None, low_open=False, high=None) -> float:
@@ -97,31 +96,6 @@ def check_settings(name, value, classes: dict, wanted: str):
     if isinstance(value, str) and value in classes:
         return classes[value]()
     raise InputError(name, f"{wanted}, got {value!r}")
-
-
-def check_pair(observed, truth, grids_only=False) -> tuple:
-    """The probability arrays of an observed grid and its truth, checked to have one shape.
-
-    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of
-    probabilities.
-
-    >>> obs, tru = check_pair(OccupancyGrid(np.full((2, 2), 0.5)), np.zeros((2, 2)))
-    >>> check_pair(obs, np.zeros((3, 2)))
-    Traceback (most recent call last):
-    ...
-    crfmap.errors.InputError: truth: shape (3, 2) does not match the observed grid's (2, 2)
-    """
-    arrays = []
-    for name, grid in (("observed", observed), ("truth", truth)):
-        if isinstance(grid, OccupancyGrid):
-            arrays.append(grid.probability)
-        elif grids_only:
-            raise InputError(name, f"expected an OccupancyGrid, got {type(grid).__name__}")
-        else:
-            arrays.append(check_probability_array(grid, name))
-    if arrays[0].shape != arrays[1].shape:
-        raise InputError("truth", f"shape {arrays[1].shape} does not match the observed grid's {arrays[0].shape}")
-    return tuple(arrays)
 
 
 # --- limits on what an input may ask for (checked before allocating) ------------------------------

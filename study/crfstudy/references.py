@@ -6,11 +6,14 @@
   messages ``m[x_receiver]`` (unnormalised products, then normalised), a dictionary of directed edges,
   synchronous (flooding) updates. It shares no code with crfmap's kernels; the tests and the toolbox comparison
   (notebook 04) use it as the independent implementation.
+- :func:`crf_energy`: the energy a labelling has under the CRF, which the graph cut
+  (:func:`crfmap.assess.mincut.graph_cut_map`) minimises: the tests' brute force and the benchmark compare by it.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from crfmap.assess.mincut import floored_unary
 from crfmap.crf.model.potentials import check_pairing, check_table, DEFAULT_HIDDEN, DEFAULT_LINK, is_symmetric, link_unary
 from crfmap.errors import InputError
 from crfmap.grid import check_probability_array
@@ -133,3 +136,23 @@ def reference_lbp(observed, hidden, link, iterations, pairing="receiver", dampin
             b = b * msg[(k, c)]
         beliefs[c] = b[0] / b.sum()
     return beliefs, done
+
+
+def crf_energy(occupied, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK) -> float:
+    """-log of the unnormalised CRF probability of a labelling (``occupied[y, x]`` boolean).
+
+    Unary -log u or -log(1 - u) per cell, -log hidden[s_a, s_b] per 4-neighbour edge with
+    s = 0 for occupied, 1 for free (the thesis layout; oriented pairing, a = west / south).
+
+    >>> round(crf_energy(np.array([[True, True]]), np.array([[0.5, 0.5]])), 4)  # 2 log 2 - log 10
+    -0.9163
+    """
+    occupied = np.asarray(occupied, bool)
+    u = floored_unary(observed, link)
+    if occupied.shape != u.shape:
+        raise InputError("occupied", f"shape {occupied.shape} does not match the grid {u.shape}")
+    cost = -np.log(check_table(hidden, "hidden"))
+    s = np.where(occupied, 0, 1)
+    unary = np.where(occupied, -np.log(u), -np.log1p(-u)).sum()
+    pairwise = cost[s[:, :-1], s[:, 1:]].sum() + cost[s[:-1, :], s[1:, :]].sum()
+    return float(unary + pairwise)

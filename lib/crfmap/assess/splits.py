@@ -27,8 +27,6 @@ import numpy as np
 
 from crfmap.errors import InputError
 
-SPLITS = ("even/odd", "temporal halves", "scan blocks", "spatial tiles")
-
 
 def temporal_halves(n_scans: int) -> np.ndarray:
     """True for the first half of ``n_scans`` scans (the map), False for the second (the scoring)."""

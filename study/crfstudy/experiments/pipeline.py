@@ -29,12 +29,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.mapping.builder import build_grid
-from crfmap.checks import check_pair
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.result import LBPResult
-from crfstudy.learning import LearningResult, learn_gradient, lbp_mse, rescale
+from crfstudy.learning import LearningResult, check_pair, learn_gradient, lbp_mse, rescale
 from crfmap.assess.metrics import Report, evaluate, roc_curve
 from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.recording import Recording
