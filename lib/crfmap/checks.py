@@ -8,10 +8,14 @@ with their domain.
 from __future__ import annotations
 
 import math
+import os
+import stat
+from pathlib import Path
 
 import numpy as np
 
 from crfmap.errors import InputError
+from crfmap.environment import number
 
 
 def check_number(name, value, low=None, low_open=False, high=None) -> float:
@@ -112,8 +116,6 @@ def max_cells() -> int:
     >>> max_cells() >= 1
     True
     """
-    from crfmap.environment import number
-
     given = number(MAX_CELLS_ENV, "cells")
     return MAX_CELLS_DEFAULT if given is None else given
 
@@ -142,10 +144,6 @@ def check_input_file(path, what, missing=None):
     ...
     crfmap.errors.InputError: /dev/null: not a regular file (a device, FIFO or socket), expected map YAML file
     """
-    import os
-    import stat
-    from pathlib import Path
-
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(repr(path), f"expected a file name ({what}), got {type(path).__name__}")
     path = Path(path)
@@ -176,9 +174,6 @@ def check_path_arg(path, what="file name", file=False):
     ...
     crfmap.errors.InputError: out.npy/: ends in '/', a folder's name; expected a file name
     """
-    import os
-    from pathlib import Path
-
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(repr(path), f"expected a {what}, got {type(path).__name__}")
     text = os.fspath(path)

@@ -24,6 +24,7 @@ the thesis's defaults). The thesis's learner keeps the default scale by construc
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import inspect
 
 import numpy as np
 
@@ -86,8 +87,6 @@ def check_lbp_options(lbp_options) -> dict:
     ...
     crfmap.errors.InputError: lbp_options: 'grid' is not a keyword option of crfmap.crf.inference.lbp.infer (expected some of dtype, init, max_iter, messages, pairing, region, schedule, threads, tol)
     """
-    import inspect
-
     if lbp_options is None:
         return {}
     if not isinstance(lbp_options, dict):

@@ -40,6 +40,7 @@ from numba import njit
 
 from crfmap.checks import check_positive
 from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
 
 PRIOR_VARIANCE = 10_000.0  # the authors' first prior N(0, 10^4) on every weight
 EM_ITERATIONS = 3  # closed-form rounds per batch (scan), as the authors' code
@@ -240,8 +241,6 @@ def beam_samples(scans, free_spacing=FREE_SPACING, bounds=None, max_range_is_no_
 def hilbert_grid(scans, resolution, bounds, feature_spacing=FEATURE_SPACING, length_scale=LENGTH_SCALE,
                  free_spacing=FREE_SPACING, progress=False):
     """[y, x] P(occupied) at the cell centres of the grid over ``bounds`` after fitting every scan in order."""
-    from crfmap.grid import OccupancyGrid
-
     resolution = check_positive("resolution", resolution)
     xmin, ymin, xmax, ymax = (float(v) for v in bounds)
     width = max(1, int(math.ceil((xmax - xmin) / resolution - 1e-9)))

@@ -39,12 +39,14 @@ import sys
 import time
 from pathlib import Path
 
-
 from crfmap.assess.peers import hilbert_row, octomap_row
 from crfmap.errors import InputError
 from crfmap.mapping import octomap
-from crfstudy.analysis.coordinate import SearchResult, coordinate_descent
+from crfstudy.analysis.coordinate import SearchResult, coordinate_descent, check_or_write
 from crfstudy.analysis.preset_search import TRAINING, TRAINING_RESOLUTION
+from crfmap.assess.scansplit import score, scan_split
+from crfmap.io.recordings import load_recording
+from crfmap.data import data_file
 
 # OctoMap's four constants, as probabilities like OctoMap's own setters (setProbHit, setClampingThresMin, ...)
 OCTOMAP_GRID = {
@@ -181,8 +183,6 @@ CACHES = {"octomap": Path(__file__).with_name("peer_search_octomap_intel.json"),
 
 
 def _brier(split, p) -> float:
-    from crfmap.assess.scansplit import score  # scansplit imports peers: here, not at the top
-
     return score(split, {"p": p}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
 
 
@@ -202,8 +202,6 @@ def octomap_search(split, grid: dict | None = None, start: dict | None = None, m
 
 def hilbert_search(split, configs, progress=False) -> list:
     """Scan-split scores of the Hilbert map for each (feature_spacing, length_scale, free_spacing) [m] in ``configs``."""
-    from crfmap.assess.scansplit import score
-
     rows = []
     for spacing, scale, free in configs:
         start = time.perf_counter()
@@ -260,10 +258,6 @@ def load_cached(peer: str, path: Path | None = None) -> dict:
 
 def training_split():
     """Intel's scan split at 5 cm (even scans map, odd scans score): the preset's training split."""
-    from crfmap.assess.scansplit import scan_split
-    from crfmap.io.recordings import load_recording
-    from crfmap.data import data_file
-
     return scan_split(load_recording(data_file(TRAINING)).scans, TRAINING_RESOLUTION)
 
 
@@ -280,8 +274,6 @@ def run_training_search(peer: str, progress: bool = True) -> dict:
 
 def main(argv=None) -> int:
     """``python -m crfstudy.analysis.peer_search octomap|hilbert [--check]``: rerun one search, (re)write or check its cache."""
-    from crfstudy.analysis.coordinate import check_or_write
-
     argv = sys.argv[1:] if argv is None else list(argv)
     if not (1 <= len(argv) <= 2 and argv[0] in SEARCHES and argv[1:] in ([], ["--check"])):
         print("usage: python -m crfstudy.analysis.peer_search octomap|hilbert [--check]", file=sys.stderr)

@@ -38,6 +38,7 @@ from crfmap.assess.metrics import Report, evaluate, roc_curve
 from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.recording import Recording
 from crfmap.world.scene import Scene
+from crfmap.sim.simulator import simulate
 
 # LBP on these 40 x 40 grids: one numba thread is faster than several (the work per
 # iteration is tiny) and keeps timings steady on a shared machine.
@@ -81,8 +82,6 @@ def scan_scene(scene: Scene, laser=None, drive=None, *, model="arctan", seed=0, 
         The grid has the truth's shape, resolution and origin; cells never seen are 0.5.
         The laser poses are the true ones (perfect odometry, as in the thesis).
     """
-    from crfmap.sim.simulator import simulate
-
     if not isinstance(scene, Scene):
         raise InputError("scene", f"expected a crfmap.world.scene.Scene, got {type(scene).__name__}")
     recording: Recording = simulate(scene, laser, drive, seed=seed, progress=progress, **simulate_options)

@@ -29,6 +29,9 @@ import tempfile
 import time
 from pathlib import Path
 
+# Only the standard library at the top, everything else inside the functions: `make venv` runs this file as a script
+# (``--requirements``) before anything is installed, and the warm-up while pip installs the rest (NEEDS).
+
 # the distributions the tasks import (tests/repro/test_warmup.py checks it): `make venv` installs these first, then
 # warms the cache while pip installs the rest (run as a script, ``--requirements`` names them with pyproject's versions)
 NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm", "scipy", "lazy-loader")

@@ -25,9 +25,11 @@ region never influence anything unless they sent messages before.
 from __future__ import annotations
 
 import time
-import numpy as np
 
-from crfmap.checks import check_number
+import numpy as np
+import numba
+
+from crfmap.checks import check_mask, check_number
 from crfmap.crf.engine import solve as engine
 from crfmap.crf.engine.messages import MESSAGE_FLOOR, check_messages
 from crfmap.crf.engine.packed import PASS_ITERATIONS, fast_tables_ok
@@ -186,15 +188,11 @@ def infer(
         messages = check_messages(messages, shape)
     active = None
     if region is not None:
-        from crfmap.checks import check_mask
-
         active = check_mask("region", region, shape)
     # hard evidence: certain cells are clamped (never updated, sending what their state implies)
     states = None if fused else certain_states(g.probability, link, tables, active)  # fused: found while packing
     sending = states if max_iter else None  # clamped cells send from the first iteration on
     senders = active if sending is None else (sending < 0 if active is None else active & (sending < 0))
-
-    import numba
 
     previous_threads = numba.get_num_threads()
     n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from crfmap.checks import check_settings
+from crfmap.checks import check_settings, check_number
 from crfmap.crf.engine.messages import beliefs_from_messages, floored, initial_messages
 from crfmap.crf.engine.progress import passed
 from crfmap.crf.inference import _plain_kernels as K
@@ -39,8 +39,6 @@ CORNERS = ("lower-left", "lower-right", "upper-left", "upper-right")
 
 
 def _check_damping(damping):
-    from crfmap.checks import check_number
-
     if check_number("damping", damping, low=0.0, high=1.0) == 1.0:
         raise InputError("damping", f"must be in [0, 1), got {damping!r}")
 
