@@ -1,9 +1,9 @@
 """Slow, obviously correct references for the fast kernels.
 
-The textbook LBP lives in the library (:mod:`crfmap.crf.inference.reference`) because notebook 04 uses it
+The textbook LBP lives in the study (:mod:`crfstudy.references`) because notebook 04 uses it
 as the independent implementation too; this file adapts it for the tests.
 """
-from crfmap.crf.inference.reference import lattice_neighbours, reference_lbp  # noqa: F401
+from crfstudy.references import lattice_neighbours, reference_lbp  # noqa: F401
 
 
 def naive_flooding(observed, hidden, link, iterations, pairing="receiver", damping=0.0):

@@ -56,7 +56,7 @@ def configure():
     if folder is None:
         return None
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
-    config = sys.modules.get("numba.core.config")
-    if config is not None:
-        config.CACHE_DIR = str(folder)
+    numba = sys.modules.get("numba")  # imported already: it read the variable then; tell its public config too
+    if numba is not None and hasattr(numba, "config"):
+        numba.config.CACHE_DIR = str(folder)
     return folder

@@ -8,11 +8,14 @@ with their domain.
 from __future__ import annotations
 
 import math
+import os
+import stat
+from pathlib import Path
 
 import numpy as np
 
 from crfmap.errors import InputError
-from crfmap.grid import OccupancyGrid, check_probability_array
+from crfmap.environment import number
 
 
 def check_number(name, value, low=None, low_open=False, high=None) -> float:
@@ -99,31 +102,6 @@ def check_settings(name, value, classes: dict, wanted: str):
     raise InputError(name, f"{wanted}, got {value!r}")
 
 
-def check_pair(observed, truth, grids_only=False) -> tuple:
-    """The probability arrays of an observed grid and its truth, checked to have one shape.
-
-    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of
-    probabilities.
-
-    >>> obs, tru = check_pair(OccupancyGrid(np.full((2, 2), 0.5)), np.zeros((2, 2)))
-    >>> check_pair(obs, np.zeros((3, 2)))
-    Traceback (most recent call last):
-    ...
-    crfmap.errors.InputError: truth: shape (3, 2) does not match the observed grid's (2, 2)
-    """
-    arrays = []
-    for name, grid in (("observed", observed), ("truth", truth)):
-        if isinstance(grid, OccupancyGrid):
-            arrays.append(grid.probability)
-        elif grids_only:
-            raise InputError(name, f"expected an OccupancyGrid, got {type(grid).__name__}")
-        else:
-            arrays.append(check_probability_array(grid, name))
-    if arrays[0].shape != arrays[1].shape:
-        raise InputError("truth", f"shape {arrays[1].shape} does not match the observed grid's {arrays[0].shape}")
-    return tuple(arrays)
-
-
 # --- limits on what an input may ask for (checked before allocating) ------------------------------
 MAX_CELLS_DEFAULT = 100_000_000  # a 10000 x 10000 grid; same bound as the grid builder's
 MAX_CELLS_ENV = "CRFMAP_MAX_CELLS"  # raise the bound: e.g. CRFMAP_MAX_CELLS=400000000 (or crfmap --max-cells)
@@ -138,8 +116,6 @@ def max_cells() -> int:
     >>> max_cells() >= 1
     True
     """
-    from crfmap.environment import number
-
     given = number(MAX_CELLS_ENV, "cells")
     return MAX_CELLS_DEFAULT if given is None else given
 
@@ -168,10 +144,6 @@ def check_input_file(path, what, missing=None):
     ...
     crfmap.errors.InputError: /dev/null: not a regular file (a device, FIFO or socket), expected map YAML file
     """
-    import os
-    import stat
-    from pathlib import Path
-
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(repr(path), f"expected a file name ({what}), got {type(path).__name__}")
     path = Path(path)
@@ -202,9 +174,6 @@ def check_path_arg(path, what="file name", file=False):
     ...
     crfmap.errors.InputError: out.npy/: ends in '/', a folder's name; expected a file name
     """
-    import os
-    from pathlib import Path
-
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(repr(path), f"expected a {what}, got {type(path).__name__}")
     text = os.fspath(path)

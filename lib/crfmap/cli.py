@@ -11,8 +11,11 @@ import importlib
 import os
 import sys
 import warnings
+from importlib.metadata import entry_points
 
 from crfmap.errors import CrfmapError, one_line
+from crfmap import environment
+from crfmap.io.atomic import Interrupted, record_written, signals_raise
 
 # Sub-command name -> module providing add_parser(subparsers) and run(args): the library's own commands, then those
 # other installed distributions register under the entry-point group "crfmap.commands" (the study's `bench`).
@@ -23,8 +26,6 @@ ENTRY_POINT_GROUP = "crfmap.commands"
 
 def commands() -> dict:
     """{name: module path} of every sub-command: the library's, then the plug-ins' (a plug-in cannot replace one)."""
-    from importlib.metadata import entry_points
-
     found = dict(COMMANDS)
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         found.setdefault(ep.name, ep.value)
@@ -108,8 +109,6 @@ def _input_name(args) -> str:
 
 
 def main(argv=None) -> int:
-    from crfmap import environment
-
     try:  # before the sub-commands import numba, which reads NUMBA_NUM_THREADS once and fails on 0
         environment.prepare(numba_cache_too=False)
     except CrfmapError as exc:
@@ -137,8 +136,6 @@ def main(argv=None) -> int:
 
 
 def _run(args) -> int:
-    from crfmap.io.atomic import Interrupted, record_written, signals_raise
-
     prefix = f"crfmap {args.command}"
     stdout = sys.stdout
     # Warnings wait until the run succeeds: a failed run prints its one error line and nothing else.

@@ -34,6 +34,7 @@ import os
 import re
 import tempfile
 from pathlib import Path
+import json
 
 from crfmap.errors import InputError
 
@@ -166,8 +167,6 @@ def run_context() -> dict | None:
     {'noise': 0.3}
     >>> del os.environ["CRFMAP_RUN"]
     """
-    import json
-
     text = os.environ.get("CRFMAP_RUN", "")
     if not text.strip():
         return None

@@ -31,7 +31,7 @@ def test_window_filters_match_loops():
 
 
 def test_graph_cut_is_the_brute_force_map():
-    from crfmap.assess.mincut import crf_energy
+    from crfstudy.references import crf_energy
 
     p = _grid(1, (3, 4))
     hidden = [[3.0, 1.0], [1.0, 3.0]]

@@ -1,7 +1,7 @@
 """The kernel tests also run with numba's JIT off (``make kernel-coverage``: NUMBA_DISABLE_JIT=1 under pytest-cov),
 so coverage sees the kernels' lines. Then every kernel is a plain Python function, about a thousand times slower:
 
-- nothing compiles (crfmap.crf.inference.compiling knows), so no compile notice is printed;
+- nothing compiles (numba fires no compile event), so no compile notice is printed;
 - the tests that inspect numba dispatchers (hops, the compile notice) are skipped;
 - a test that runs for more than :data:`CPU_BUDGET` seconds of CPU time (a large grid in pure Python) is skipped
   there and then, with its name in the skip reason, so the target ends in minutes (CPU time, not wall clock: a

@@ -16,7 +16,6 @@
 """
 from __future__ import annotations
 
-
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy import ndimage
@@ -24,6 +23,7 @@ from scipy import ndimage
 from crfmap.errors import InputError
 from crfmap.assess.mincut import graph_cut_map
 from crfmap.grid import UNKNOWN
+from crfmap.crf.presets import get_preset
 
 _WINDOW = np.ones((3, 3))  # the 3x3 window of the window filters
 
@@ -95,15 +95,11 @@ def _logodds(split, raw, thesis_max_iter):
 
 def _thesis(split, raw, thesis_max_iter):
     """LBP with the thesis's tables on the raw grid."""
-    from crfmap.crf.presets import get_preset
-
     return get_preset("thesis").refine(raw, max_iter=thesis_max_iter).beliefs.probability
 
 
 def _graphcut(split, raw, thesis_max_iter):
     """The MAP labelling of the thesis's CRF."""
-    from crfmap.crf.presets import get_preset
-
     return graph_cut(raw, get_preset("thesis").hidden)
 
 

@@ -20,10 +20,11 @@ preset with that T (its ``temperature`` field, applied by the preset's own refin
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
-from crfmap.crf.presets import LOGIT_FLOOR, temper
+from crfmap.crf.presets import LOGIT_FLOOR, temper, get_preset
 from crfmap.errors import InputError
 
 DEFAULT_BINS = 10
@@ -117,10 +118,6 @@ def tempered_preset(preset, temperature: float):
     >>> tempered_preset(DEFAULT_PRESET, 0.9).temperature
     0.9
     """
-    from dataclasses import replace
-
-    from crfmap.crf.presets import get_preset
-
     base = get_preset(preset) if isinstance(preset, str) else preset
     return replace(base, temperature=temperature)
 

@@ -1,8 +1,9 @@
-"""The exact MAP labelling of the grid CRF by a graph cut (PyMaxflow), and the CRF energy it minimises.
+"""The exact MAP labelling of the grid CRF by a graph cut (PyMaxflow).
 
 A baseline beside LBP (:mod:`crfmap.assess.baselines`, ``crfmap evaluate``, the rooms experiment)
 and a check of it (``crfmap bench``'s ``pymaxflow-map`` row): with a symmetric attractive hidden
-table the energy is submodular, so a Boykov-Kolmogorov cut finds its exact minimum. PyMaxflow is
+table the CRF's energy is submodular, so a Boykov-Kolmogorov cut finds its exact minimum (the energy itself, the
+test reference: ``crfstudy.references.crf_energy``). PyMaxflow is
 optional (the ``compare`` extra); :func:`graph_cut_map` imports it when called.
 """
 from __future__ import annotations
@@ -17,26 +18,6 @@ from crfmap.errors import InputError
 def floored_unary(observed, link=DEFAULT_LINK):
     """P(occupied) each hidden cell gets from its observation, floored as crfmap.crf.inference.lbp.infer floors it."""
     return np.clip(link_unary(observed, link), MESSAGE_FLOOR, 1.0 - MESSAGE_FLOOR)
-
-
-def crf_energy(occupied, observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK) -> float:
-    """-log of the unnormalised CRF probability of a labelling (``occupied[y, x]`` boolean).
-
-    Unary -log u or -log(1 - u) per cell, -log hidden[s_a, s_b] per 4-neighbour edge with
-    s = 0 for occupied, 1 for free (the thesis layout; oriented pairing, a = west / south).
-
-    >>> round(crf_energy(np.array([[True, True]]), np.array([[0.5, 0.5]])), 4)  # 2 log 2 - log 10
-    -0.9163
-    """
-    occupied = np.asarray(occupied, bool)
-    u = floored_unary(observed, link)
-    if occupied.shape != u.shape:
-        raise InputError("occupied", f"shape {occupied.shape} does not match the grid {u.shape}")
-    cost = -np.log(check_table(hidden, "hidden"))
-    s = np.where(occupied, 0, 1)
-    unary = np.where(occupied, -np.log(u), -np.log1p(-u)).sum()
-    pairwise = cost[s[:, :-1], s[:, 1:]].sum() + cost[s[:-1, :], s[1:, :]].sum()
-    return float(unary + pairwise)
 
 
 def potts_weight(hidden=DEFAULT_HIDDEN) -> tuple:

@@ -35,13 +35,14 @@ a reference prediction; :func:`block_resamples` hands the same draws to other sc
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from crfmap.assess.block_bootstrap import _auc_resampled, _block_counts, _block_ids, _draws
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
+from crfmap.mapping.builder import count_hits, scan_bounds
 
 GROUPS = ("all", "seen", "unseen")
 METRICS = ("brier", "logloss", "auc", "wall_recall")
@@ -57,8 +58,6 @@ def split_scans(scans, parity: int):
     >>> split_scans(s, 1).stamps.tolist()
     [1.0, 3.0]
     """
-    from dataclasses import replace
-
     if parity not in (0, 1):
         raise InputError("parity", f"must be 0 (even scans) or 1 (odd scans), got {parity!r}")
     keep = slice(parity, None, 2)
@@ -140,8 +139,6 @@ def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress:
     >>> sp.first_hits.tolist(), sp.second_hits.tolist()
     ([[0, 0, 0, 0, 1]], [[0, 0, 0, 1, 0]])
     """
-    from crfmap.mapping.builder import count_hits, scan_bounds
-
     if len(scans) < 2:
         raise InputError(getattr(scans, "source", "") or "scans", f"need at least 2 scans to split, got {len(scans)}")
     if bounds is None:

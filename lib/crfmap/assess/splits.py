@@ -26,8 +26,8 @@ from dataclasses import replace
 import numpy as np
 
 from crfmap.errors import InputError
-
-SPLITS = ("even/odd", "temporal halves", "scan blocks", "spatial tiles")
+from crfmap.assess.scansplit import ScanSplit, score
+from crfmap.mapping.builder import count_hits, scan_bounds
 
 
 def temporal_halves(n_scans: int) -> np.ndarray:
@@ -64,9 +64,6 @@ def split_by(scans, first, resolution: float, bounds=None):
     The grid covers every scan (as :func:`crfmap.assess.scansplit.scan_split`) unless ``bounds``
     (xmin, ymin, xmax, ymax) [m] is given.
     """
-    from crfmap.assess.scansplit import ScanSplit
-    from crfmap.mapping.builder import count_hits, scan_bounds
-
     keep = np.asarray(first, dtype=bool)
     if keep.shape != (len(scans),):
         raise InputError("first", f"needs one value per scan ({len(scans)}), got shape {keep.shape}")
@@ -104,8 +101,6 @@ def headline(scores: dict, method: str, reference: str = "raw", metric: str = "b
 def block_sensitivity(split, predictions: dict, blocks, reference: str = "raw", n_boot: int = 200, seed: int = 0,
                       metric: str = "brier") -> dict:
     """{block: {method: {group: (lo, hi)}}}: the paired difference's interval for each bootstrap block side."""
-    from crfmap.assess.scansplit import score
-
     out = {}
     for b in blocks:
         s = score(split, predictions, n_boot=n_boot, block=int(b), seed=seed, reference=reference, metrics=(metric,))

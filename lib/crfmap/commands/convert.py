@@ -12,6 +12,7 @@ import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.commands.build import add_bag_options, add_ros2_bag_options, ros2_bag_kwargs
+from crfmap.io.recordings import load_recording
 
 
 def add_parser(sub):
@@ -100,7 +101,6 @@ def shift_zero_start(rec, source):
 
 def run(args: argparse.Namespace) -> int:
     from crfmap.io.bag_writer import write_bag
-    from crfmap.io.recordings import load_recording
 
     out = Path(args.output)
     fmt = args.format or ("ros1" if out.suffix == ".bag" else "ros2")

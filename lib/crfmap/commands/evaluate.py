@@ -3,11 +3,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from crfmap.assess.baselines import BASELINES
 from crfmap.assess.peers import PEERS
-from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
+from crfmap.crf.presets import DEFAULT_PRESET, PRESETS, get_preset
 from crfmap.errors import InputError
+from crfmap.io.recordings import load_recording
 
 
 def add_parser(sub):
@@ -53,7 +55,6 @@ def run(args: argparse.Namespace) -> int:
     from crfmap.assess.calibration import split_calibration
     from crfmap.assess.comparison import compare, parse_methods, table_rows
     from crfmap.assess.scansplit import scan_split
-    from crfmap.io.recordings import load_recording
     from tabulate import tabulate
 
     if args.boot < 0:
@@ -62,7 +63,6 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--block", f"must be a positive number of cells, got {args.block}")
     if not args.resolution > 0:
         raise InputError("--resolution", f"must be positive, got {args.resolution}")
-    from crfmap.crf.presets import get_preset
 
     args.preset = DEFAULT_PRESET if args.preset is None else args.preset
     try:
@@ -70,7 +70,6 @@ def run(args: argparse.Namespace) -> int:
     except InputError as e:
         raise InputError("--preset", e.problem) from None
     methods = parse_methods(args.methods, args.preset)
-    import sys
 
     progress = sys.stderr.isatty()  # a minute or more on a real log: bars where someone watches
     rec = load_recording(args.input, max_range=args.max_range)

@@ -2,11 +2,21 @@
 from __future__ import annotations
 
 import argparse
+import warnings
+import sys
+from dataclasses import replace
+
+import numpy as np
 
 from crfmap.commands.build import add_map_output_options, save_map_output
 from crfmap.crf.inference.schedules import SETTINGS
-from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
+from crfmap.crf.presets import DEFAULT_PRESET, PRESETS, custom_preset, get_preset
 from crfmap.errors import InputError
+from crfmap.checks import check_int, check_number
+from crfmap.crf.model.potentials import check_table
+from crfmap.io.map_server import FREE_THRESH_DEFAULT
+from crfmap.crf.engine import progress
+from crfmap.crf.inference.compiling import compile_timer
 
 
 def add_parser(sub):
@@ -57,9 +67,6 @@ def add_parser(sub):
 def _check_options(args, hidden, link):
     """Options that cannot work, refused before any work is done."""
 
-    import numpy as np
-
-    from crfmap.checks import check_int, check_number
     from crfmap.commands.outputs import check_grid_output, check_output
 
     check_grid_output(args.output)
@@ -85,11 +92,6 @@ def _check_options(args, hidden, link):
 
 def _preset(args):
     """The preset the options ask for: --hidden/--link make a custom one, else --preset (default DEFAULT_PRESET)."""
-    from dataclasses import replace
-
-    from crfmap.crf.model.potentials import check_table
-    from crfmap.crf.presets import custom_preset, get_preset
-
     if args.hidden is not None or args.link is not None:
         if args.preset is not None:
             raise InputError("--preset", "--hidden/--link make a custom preset of their own: give them or --preset")
@@ -115,10 +117,7 @@ def load_input(args):
     loads as free: refining and writing that map (for Jazzy's 0.196) would make every unexplored cell
     free for good. Unless ``--free-thresh`` is given, such a map is read with map_saver's 0.196 instead.
     """
-    import warnings
-
     from crfmap.io.grid_files import load_grid
-    from crfmap.io.map_server import FREE_THRESH_DEFAULT
 
     def load(free_thresh):
         return load_grid(args.input, free_thresh=free_thresh, occupied_thresh=args.occupied_thresh,
@@ -152,13 +151,6 @@ def kernel_time(kernels, compiling) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    import sys
-
-    import numpy as np
-
-    from crfmap.crf.engine import progress
-    from crfmap.crf.inference.compiling import compile_timer
-
     if args.max_iter is not None and args.max_iter < 0:
         raise InputError("--max-iter", f"must be non-negative, got {args.max_iter}")
     preset = _preset(args)

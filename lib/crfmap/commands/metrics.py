@@ -5,6 +5,10 @@ import argparse
 import json
 import math
 
+import numpy as np
+
+from crfmap.errors import InputError
+
 
 def add_parser(sub):
     p = sub.add_parser("metrics", help="compare a grid with ground truth",
@@ -17,11 +21,8 @@ def add_parser(sub):
 
 
 def run(args: argparse.Namespace) -> int:
-    from crfmap.errors import InputError
     from crfmap.io.grid_files import load_grid
     from crfmap.assess.metrics import evaluate
-
-    import numpy as np
 
     pred = load_grid(args.prediction)
     truth = load_grid(args.truth)

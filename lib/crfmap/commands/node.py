@@ -12,11 +12,13 @@ SIGINT (Ctrl-C) and SIGTERM end the node cleanly; it then prints what it did on 
 from __future__ import annotations
 
 import argparse
+import signal
+import threading
 
 from crfmap.io.nav2_values import VALUE_MODES
-
 from crfmap.crf.presets import DEFAULT_PRESET, PRESETS
 from crfmap.errors import InputError
+from crfmap.checks import check_number
 
 BACKENDS = ("dds", "rclpy", "rospy")
 
@@ -73,8 +75,6 @@ def add_parser(sub):
 
 
 def _check(args):
-    from crfmap.checks import check_number
-
     check_number("--period", args.period, low=0.0)
     if args.mode == "map":
         check_number("--resolution", args.resolution, low=0.0, low_open=True)
@@ -122,9 +122,6 @@ def make_node(args):
 
 
 def run(args: argparse.Namespace) -> int:
-    import signal
-    import threading
-
     from crfmap.ros.node import log_line, spin
 
     _check(args)

@@ -5,6 +5,8 @@ import os
 from pathlib import Path
 
 from crfmap.errors import InputError
+from crfmap.io.map_server import read_map_yaml
+from crfmap.checks import check_path_arg
 
 MAP_IMAGE_SUFFIXES = (".pgm", ".png")
 
@@ -27,7 +29,6 @@ def named_files(item) -> list[Path]:
     item = Path(item)
     if item.suffix.lower() not in (".yaml", ".yml") or item.name.lower().endswith(".npy.yaml"):
         return []
-    from crfmap.io.map_server import read_map_yaml
 
     try:
         return [Path(read_map_yaml(item)["image_path"])]
@@ -76,8 +77,6 @@ def check_grid_output(output):
     ...
     crfmap.errors.InputError: out.npy/: ends in '/', a folder's name; expected a grid file name (.yaml or .npy)
     """
-    from crfmap.checks import check_path_arg
-
     path = check_path_arg(output, "grid file name (.yaml or .npy)", file=True)
     if not path.name.lower().endswith(GRID_SUFFIXES):
         raise InputError(output, "the output must end in .yaml/.yml (map_server map) or .npy")

@@ -17,12 +17,13 @@ import time
 from pathlib import Path
 
 from crfmap.errors import InputError
+from crfmap.world.scene import MODES
+from crfmap.world.scenes import SCENES, make_scene
+from crfmap.commands.build import add_ros2_bag_options, ros2_bag_kwargs
+from crfmap.checks import check_int, check_number
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    from crfmap.world.scene import MODES
-    from crfmap.world.scenes import SCENES
-
     p = subparsers.add_parser(
         "simulate",
         help="simulate a robot with a laser in a ground-truth scene and write a ROS bag",
@@ -60,7 +61,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    "reads a stamp of 0 as 'no time')")
     p.add_argument("--legacy-no-return", action="store_true",
                    help="report beams that hit nothing as -1 (the thesis) instead of +inf (REP 117)")
-    from crfmap.commands.build import add_ros2_bag_options
 
     add_ros2_bag_options(p)
     p.add_argument("--overwrite", action="store_true", help="replace OUT_BAG if it exists")
@@ -73,8 +73,6 @@ MAX_BEAMS = 100_000  # beams per scan; real scanners have a few thousand
 
 def check_options(args):
     """Refuse options no laser or robot can have, before any work (InputError naming the option)."""
-    from crfmap.checks import check_int, check_number
-
     check_int("--beams", args.beams, low=1, high=MAX_BEAMS)
     check_number("--fov", args.fov, low=0.0, low_open=True, high=360.0)
     check_number("--range", args.range_max, low=0.0, low_open=True, high=1e4)
@@ -98,7 +96,6 @@ def check_options(args):
 def build_recording(args):
     """The simulated :class:`~crfmap.recording.Recording` the command would write (no file touched)."""
     check_options(args)
-    from crfmap.world.scenes import make_scene
     from crfmap.sim.drives import Explore
     from crfmap.sim.laser import LEGACY_NO_RETURN, Laser
     from crfmap.sim.simulator import START_TIME, simulate
@@ -136,8 +133,6 @@ def build_recording(args):
 
 
 def run(args) -> int:
-    from crfmap.commands.build import ros2_bag_kwargs
-
     out = Path(args.out)
     bag_kwargs = ros2_bag_kwargs(args, args.format)
     if (out.exists() or out.is_symlink()) and not args.overwrite:

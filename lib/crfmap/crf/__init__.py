@@ -5,8 +5,8 @@
 - :mod:`crfmap.crf.inference`: how it is solved. ``lbp.infer`` (checks its input, picks a kernel,
   returns an ``LBPResult`` from ``result``), ``schedules`` (each schedule with the settings
   that apply to it, and the plain kernels that run them), ``regions`` (bounded LBP's masks),
-  ``multiscale`` (coarse-to-fine start), ``exact`` and ``reference`` (brute force and a textbook
-  LBP, the references the tests compare with), ``compiling`` (the first-run notice).
+  ``multiscale`` (coarse-to-fine start), ``compiling`` (the first-run notice). The references the tests
+  compare with (brute force, a textbook LBP) are the study's (``crfstudy.references``).
 - :mod:`crfmap.crf.engine`: the fast checkerboard engine. ``solve.solve`` (its one entry, an
   ``EngineResult``), ``packed`` (red/black odds planes and the passes over them),
   ``_message_update`` (the numba message update), ``_layout`` (packing kernels),
@@ -50,8 +50,6 @@ _API = {
     "near_known": "inference.regions",
     "near_cells": "inference.regions",
     "disc_region": "inference.regions",
-    "exact_marginals": "inference.exact",
-    "reference_lbp": "inference.reference",
     "initial_messages": "engine.messages",
     "MESSAGE_FLOOR": "engine.messages",
     "PackedBlock": "engine.packed",

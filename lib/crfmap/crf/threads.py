@@ -26,6 +26,8 @@ import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
+import numba
+
 _pools: dict = {}
 _lock = threading.Lock()
 
@@ -44,8 +46,6 @@ if hasattr(os, "register_at_fork"):
 def thread_count(threads=None) -> int:
     """``threads`` as a whole number >= 1 (None: numba's current thread count)."""
     if threads is None:
-        import numba
-
         threads = numba.get_num_threads()
     return max(1, int(threads))
 

@@ -14,6 +14,7 @@ import numpy as np
 from crfmap.errors import InputError
 from crfmap.frames import quaternion_to_yaw, yaw_to_quaternion
 from crfmap.grid import MAX_EXTENT_M
+from crfmap.io.map_server import grid_from_values
 
 T_SCAN = "sensor_msgs/msg/LaserScan"
 T_ODOM = "nav_msgs/msg/Odometry"
@@ -65,9 +66,7 @@ def grid_from_message(msg, source, topic):
     if data.size != int(info.width) * int(info.height) or data.size == 0:
         raise InputError(source, f"{topic}: {data.size} cells for a {info.width} x {info.height} grid")
     resolution = float(str(np.float32(info.resolution)))  # undo the float32 of MapMetaData: 0.05, not 0.0500000007
-    try:
-        from crfmap.io.map_server import grid_from_values  # 50 stays a known 50
-
+    try:  # grid_from_values: 50 stays a known 50
         return grid_from_values(data.reshape(int(info.height), int(info.width)), resolution=resolution,
                                 origin=pose_of(info.origin, f"{source}: {topic} origin"), frame_id=msg.header.frame_id or "map")
     except InputError as exc:

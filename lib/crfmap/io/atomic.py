@@ -18,6 +18,7 @@ import signal
 import tempfile
 import threading
 from pathlib import Path
+import sqlite3
 
 CAUGHT_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
@@ -111,8 +112,6 @@ def _completed(*paths):
 
 def _named(exc, path):
     """A write failure as an OSError naming ``path`` (a failed write(2) or a storage library names no file)."""
-    import sqlite3
-
     if isinstance(exc, OSError) and exc.filename is None:
         if exc.errno is None:  # numpy's short write: "N requested and M written"
             return OSError(errno.EIO, f"write failed, nothing was written ({exc}: disk full or file-size limit?)",

@@ -32,6 +32,7 @@ from crfmap.io.rosbag1_files import BAG_MAGIC, check_records
 from crfmap.errors import InputError
 from crfmap.frames import TfTree, compose, interpolate_poses
 from crfmap.recording import Recording, ScanSet, Trajectory
+from crfmap.io._yaml import load_text, read_text_file
 
 POSE_SOURCES = ("auto", "tf", "odom", "truth")
 ANGLE_TOLERANCE = 1e-4  # [rad] scan geometry differing by less than this counts as the same (float32 angles)
@@ -75,8 +76,6 @@ def _starts_with(path, magic: bytes) -> bool:
 def _check_metadata(path, metadata):
     """Read a ROS2 bag's metadata.yaml strictly first (no aliases, bounded size and nesting), so that a
     hostile one is refused in one line instead of hanging or exhausting the reader."""
-    from crfmap.io._yaml import load_text, read_text_file
-
     try:
         doc = load_text(read_text_file(metadata, "ROS2 bag metadata (metadata.yaml)"), metadata)
     except InputError as exc:

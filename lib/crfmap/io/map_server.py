@@ -32,7 +32,7 @@ from crfmap.io._yaml import finite_number, format_number, read_mapping
 from crfmap.io._yaml import write_text as _write_text  # looked up here at call time, so a test can make it fail
 from crfmap.io.atomic import atomic_paths, unit_lock
 from crfmap.io.image_guard import check_map_image
-from crfmap.checks import check_grid_geometry, check_path_arg
+from crfmap.checks import check_grid_geometry, check_path_arg, check_number
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid, check_probability_array
 from crfmap.io.nav2_loader import DEFAULT_LOADER, LOADERS, occupancy, read_pixels
@@ -148,7 +148,6 @@ def _optional_thresh(name, value):
     """A threshold argument: None (the file's) or a number in [0, 1]; InputError naming ``name`` otherwise."""
     if value is None:
         return None
-    from crfmap.checks import check_number
 
     return check_number(name, value, low=0.0, high=1.0)
 

@@ -100,11 +100,3 @@ def no_return_rule(ranges) -> MaxRangeGuess:
                              f"{pile} may be no-return codes, kept as hits; pass --max-range {low:g} if they are")
     return MaxRangeGuess(None, "none found (every reading is a hit)")
 
-
-def guess_max_range(ranges: np.ndarray):
-    """The maximum range [m] :func:`no_return_rule` finds in ``ranges``, or None (kept for older callers).
-
-    >>> guess_max_range(np.r_[np.linspace(1, 49.9, 500), np.full(40, 50.0)])
-    50.0
-    """
-    return no_return_rule(ranges).max_range

@@ -7,6 +7,7 @@ of the commands, whose arguments it receives.
 from __future__ import annotations
 
 from crfmap.errors import InputError
+from crfmap.checks import check_path_arg
 
 CARMEN_SUFFIXES = (".log", ".log.gz", ".clf", ".clf.gz")
 
@@ -25,8 +26,6 @@ def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, 
     :func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller writes the odometry out
     (``convert``), so a log's corrupt ODOM records are warned of (as they are for ``pose_source='odom'``).
     """
-    from crfmap.checks import check_path_arg
-
     path = check_path_arg(path, "log or bag")
     if not is_carmen_log(path):
         from crfmap.io.bag_reader import read_bag

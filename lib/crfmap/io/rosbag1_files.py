@@ -16,6 +16,8 @@ import struct
 
 from rosbags.rosbag1 import Writer
 
+from crfmap.errors import InputError
+
 BAG_MAGIC = b"#ROSBAG V2.0\n"
 FILE_HEADER_LENGTH = 4096  # rosbag's _FILE_HEADER_LENGTH: header + padding, without the two length fields
 OP_FILE_HEADER = 0x03
@@ -54,8 +56,6 @@ def check_records(path, file_size=None):
     uncompressed bytes) equal to its stored bytes when uncompressed, at most :data:`MAX_CHUNK_EXPANSION` times
     them when compressed: a size of 0xFFFFFFFF on a 7 kB chunk was read as if true.
     """
-    from crfmap.errors import InputError
-
     with open(path, "rb") as f:
         size = file_size if file_size is not None else f.seek(0, 2)
         f.seek(len(BAG_MAGIC))
@@ -85,8 +85,6 @@ def check_records(path, file_size=None):
 
 
 def _check_chunk(path, pos, fields, data_length):
-    from crfmap.errors import InputError
-
     compression = fields.get("compression", b"").decode("ascii", "replace")
     if compression not in CHUNK_COMPRESSIONS:
         raise InputError(path, f"chunk at byte {pos}: unknown compression {compression!r} "

@@ -22,10 +22,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from crfmap.mapping._beam_kernels import _count_hits, _logodds_update
 from crfmap.checks import check_positive as _positive
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid
+from crfmap.recording import ScanSet
 
 BOUNDS_PADDING = 0.5  # [m] margin around poses and end points when the bounds come from the data
 MAX_CELLS = 100_000_000  # a bigger grid is almost surely a unit mistake (and would not fit in memory)
@@ -191,8 +193,6 @@ def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_rang
 def sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_max, frame_id="map"):
     """A one-scan ScanSet of a laser's geometry at the centre of ``bounds`` (xmin, ymin, xmax, ymax) [m], no readings:
     what a grid for that sensor is made from before any scan arrives (the online mappers' ``for_sensor``)."""
-    from crfmap.recording import ScanSet
-
     try:
         xmin, ymin, xmax, ymax = (float(v) for v in bounds)
     except (TypeError, ValueError):

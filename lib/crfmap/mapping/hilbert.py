@@ -40,13 +40,14 @@ from numba import njit
 
 from crfmap.checks import check_positive
 from crfmap.errors import InputError
+from crfmap.grid import OccupancyGrid
 
 PRIOR_VARIANCE = 10_000.0  # the authors' first prior N(0, 10^4) on every weight
 EM_ITERATIONS = 3  # closed-form rounds per batch (scan), as the authors' code
 CUTOFF = 4.0  # [length scales] features beyond are dropped (exp(-8) = 3e-4 of the peak)
 # Chosen on the Intel log only, by the certainty preset's search rule (a coordinate search by the scan-split Brier
-# score; the record: crfmap.assess.peers.HILBERT_SEARCH_INTEL, each value with grid values on either side), then fixed
-# for every recording:
+# score; the record: crfstudy.analysis.peer_search.HILBERT_SEARCH_INTEL, each value with grid values on either
+# side), then fixed for every recording:
 FEATURE_SPACING = 0.075  # [m] between RBF centres
 LENGTH_SCALE = 0.025  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2) = 800 / m^2
 FREE_SPACING = 0.05  # [m] between free points sampled along a beam
@@ -240,8 +241,6 @@ def beam_samples(scans, free_spacing=FREE_SPACING, bounds=None, max_range_is_no_
 def hilbert_grid(scans, resolution, bounds, feature_spacing=FEATURE_SPACING, length_scale=LENGTH_SCALE,
                  free_spacing=FREE_SPACING, progress=False):
     """[y, x] P(occupied) at the cell centres of the grid over ``bounds`` after fitting every scan in order."""
-    from crfmap.grid import OccupancyGrid
-
     resolution = check_positive("resolution", resolution)
     xmin, ymin, xmax, ymax = (float(v) for v in bounds)
     width = max(1, int(math.ceil((xmax - xmin) / resolution - 1e-9)))

@@ -39,6 +39,7 @@ from numba import njit
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid
 from crfmap.mapping._beam_kernels import _HIT, _SKIP, _classify
+from crfmap.mapping.builder import _geometry, sensor_probe
 
 # OctoMap's defaults (octomap/src/AbstractOccupancyOcTree.cpp)
 P_HIT = 0.7
@@ -151,8 +152,6 @@ def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, cla
     Same grid as :func:`crfmap.mapping.build_grid` for the same ``scans``, ``resolution`` and
     ``bounds``; ``probability`` is ``sigmoid(l)`` where a cell was updated, 0.5 elsewhere.
     """
-    from crfmap.mapping.builder import _geometry
-
     l_hit, l_miss = _logit(p_hit, "p_hit"), _logit(p_miss, "p_miss")
     l_min, l_max = _logit(clamp_min, "clamp_min"), _logit(clamp_max, "clamp_max")
     if not (l_hit > 0 > l_miss):
@@ -215,8 +214,6 @@ class OctoMapUpdater:
     def for_sensor(cls, bounds, resolution, angle_min, angle_increment, n_beams, range_min, range_max,
                    free_on_no_return=False, max_range_is_no_return=True, **params) -> "OctoMapUpdater":
         """An updater for a grid over ``bounds`` (xmin, ymin, xmax, ymax) [m] and a laser's geometry."""
-        from crfmap.mapping.builder import _geometry, sensor_probe
-
         probe = sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_max)
         return cls(_geometry(probe, resolution, bounds, free_on_no_return, max_range_is_no_return), **params)
 

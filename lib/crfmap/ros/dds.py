@@ -23,10 +23,13 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import tempfile
+from types import SimpleNamespace
 
 from crfmap.errors import InputError
-from crfmap.ros import qos as ros_qos
+from crfmap.ros import qos as ros_qos, dds_types as types
 from crfmap.ros.messages import stamp_parts
+from crfmap.ros.dds_types import TYPES
 
 
 def ros_topic_name(topic: str) -> str:
@@ -84,9 +87,6 @@ def dds_configuration(value=None) -> str | None:
 @contextlib.contextmanager
 def _c_stderr():
     """Inside the block, what C code writes to file descriptor 2 goes to a temporary file; ``.text`` after it."""
-    import tempfile
-    from types import SimpleNamespace
-
     said = SimpleNamespace(text="")
     sys.stderr.flush()
     saved = os.dup(2)
@@ -155,8 +155,6 @@ def _info(types, msg):
 
 def native_message(kind, msg):
     """The Cyclone DDS sample of a :class:`crfmap.ros.messages.GridMessage` for a 'grid' or 'metadata' topic."""
-    from crfmap.ros import dds_types as types
-
     if kind == "metadata":
         return _info(types, msg)
     return types.OccupancyGrid(header=types.Header(stamp=_time(types, msg.stamp_ns), frame_id=msg.frame_id),
@@ -194,8 +192,6 @@ class DdsBackend:
 
     def _topic(self, topic, kind):
         from cyclonedds.topic import Topic
-
-        from crfmap.ros.dds_types import TYPES
 
         t = Topic(self.participant, ros_topic_name(topic), TYPES[kind])
         self.keep.append(t)

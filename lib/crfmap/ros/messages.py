@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -31,6 +32,8 @@ from crfmap.io.nav2_values import occupancy_values
 from crfmap.errors import InputError
 from crfmap.frames import quaternion_to_yaw, yaw_to_quaternion
 from crfmap.grid import MAX_EXTENT_M
+from crfmap.io.map_server import grid_from_values
+from crfmap.checks import check_cells
 
 ANGLE_TOLERANCE = 1e-4  # [rad] float32 scan angles differing by less than this agree (as crfmap.io.bag_reader)
 
@@ -164,10 +167,6 @@ def transforms_of(msg):
 # --- checks -----------------------------------------------------------------------------------
 def occupancy_grid(msg: GridMessage):
     """The :class:`~crfmap.grid.OccupancyGrid` of a grid message (values v -> v / 100, -1 -> 0.5), or BadMessage."""
-    from crfmap.io.map_server import grid_from_values
-
-    from crfmap.checks import check_cells
-
     width, height, n = int(msg.width), int(msg.height), int(msg.data.size)
     if n == 0 and width * height == 0:  # consistent, but nothing to refine (a SLAM node before its first scan)
         raise BadMessage("empty map", f"the map is empty ({width} x {height} cells, no data): nothing to refine")
@@ -184,8 +183,6 @@ def occupancy_grid(msg: GridMessage):
     if not (math.isfinite(x) and math.isfinite(y)):
         raise BadMessage("origin", f"position ({x:g}, {y:g}) is not finite")
     try:
-        from types import SimpleNamespace
-
         yaw = quaternion_to_yaw(SimpleNamespace(x=qx, y=qy, z=qz, w=qw), "origin")
     except InputError as exc:
         raise BadMessage("non-unit quaternion", f"origin {exc.problem}") from None

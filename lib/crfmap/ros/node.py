@@ -37,6 +37,8 @@ from crfmap.io.nav2_values import VALUE_MODES, occupancy_values
 from crfmap.ros.messages import (BadMessage, check_scan, grid_message, grid_out, occupancy_grid, same_geometry,
                                  scan_message, transforms_of)
 from crfmap.ros.tf_buffer import TfBuffer, stamp_seconds
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+from crfmap.mapping import OnlineMapper
 
 SLICE_SECONDS = 0.05  # map mode integrates scans for at most this long before the backend spins again
 IDLE_SECONDS = 0.1  # longest wait for messages between two looks at the stop flag
@@ -51,8 +53,6 @@ def refine_grid(grid):
     >>> refine_grid(g).shape
     (1, 4)
     """
-    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
-
     return get_preset(DEFAULT_PRESET).refine(grid).nav2_map  # the preset's own solver, as crfmap infer runs it
 
 
@@ -221,8 +221,6 @@ class MapNode:
 
     # --- work -------------------------------------------------------------------------------------
     def _make_mapper(self, scan):
-        from crfmap.mapping import OnlineMapper
-
         return OnlineMapper.for_sensor(self.bounds, self.resolution, scan.angle_min, scan.angle_increment,
                                        int(scan.ranges.size), scan.range_min, scan.range_max, **self.mapper_options)
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from crfmap.frames import TfTree
+from crfmap.frames import TfTree, compose, interpolate_poses
 from crfmap.ros.messages import Transform
 
 MAX_SAMPLES = 20_000  # per moving transform; past it the older half goes (tf2 keeps 10 s)
@@ -62,7 +62,6 @@ class TfBuffer:
         times = np.array([float(stamp)])
         poses = np.asarray(mount, np.float64)[None, :].copy()
         current, seen, moving = start, {start}, 0
-        from crfmap.frames import compose, interpolate_poses
 
         while current != fixed_frame:
             if current in tree.static:

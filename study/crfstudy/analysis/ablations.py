@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from crfmap.crf.presets import LOGIT_FLOOR
+from crfmap.crf.presets import LOGIT_FLOOR, coupling_table, get_preset
 from crfmap.errors import InputError
 
 ABLATIONS = ("J = 0", "no margin", "no cap")
@@ -39,8 +39,6 @@ CERTAINTY = "certainty"  # the model searched here (the gated default is this mo
 
 def ablation_presets(base: str | None = None) -> dict:
     """{name: Preset}: the ``base`` preset (None: the certainty preset, the model this study is about) and its ablations (see the module docstring)."""
-    from crfmap.crf.presets import coupling_table, get_preset
-
     p = get_preset(CERTAINTY) if base is None else get_preset(base)
     return {p.name: p, "J = 0": replace(p, hidden=coupling_table(0.0)), "no margin": replace(p, margin=None),
             "no cap": replace(p, limit=math.inf)}

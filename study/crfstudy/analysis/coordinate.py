@@ -19,8 +19,11 @@ they were first scored, :attr:`SearchResult.configurations` counts them (the sea
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import json
+from pathlib import Path
 
 from crfmap.errors import InputError
+from crfmap.io.atomic import atomic_path
 
 
 @dataclass
@@ -106,11 +109,6 @@ def coordinate_descent(score, grid: dict, start: dict, order=None, max_rounds: i
 def check_or_write(result: dict, cache, cached: dict | None, label: str, details: str = "") -> int:
     """The end of a search command: with ``cached`` (``--check``), say whether the rerun ``result`` chose what the
     cache holds (exit status 0) or not (1); without, write ``result`` to ``cache`` atomically and say so."""
-    import json
-    from pathlib import Path
-
-    from crfmap.io.atomic import atomic_path
-
     if cached is not None:
         same = cached["best"] == result["best"] and len(cached["trace"]) == len(result["trace"])
         print(f"{label} best {result['best']} (Brier {result['best_brier']:.7f}); cache "

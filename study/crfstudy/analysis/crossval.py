@@ -39,6 +39,9 @@ from crfmap.checks import check_int
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid, as_grid, check_probability_array
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.regions import near_known
+from crfmap.assess.metrics import evaluate, roc_curve
 
 NOT_IN_A_FOLD = -1  # fold id of cells that are never held out (unknown cells)
 
@@ -155,9 +158,6 @@ def lbp_predictor(hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, margin=3, **options)
     border). ``margin=None`` runs on the whole grid. ``options`` go to :func:`~crfmap.crf.inference.lbp.infer`
     (``schedule``, ``max_iter``, ``tol``, ...).
     """
-    from crfmap.crf.inference.lbp import infer
-    from crfmap.crf.inference.regions import near_known
-
     if margin is not None and not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool)
                                    and margin >= 0):
         raise InputError("margin", f"must be None or a whole number of cells >= 0, got {margin!r}")
@@ -207,14 +207,10 @@ class CrossValidation:
 
     def report(self):
         """MSE, precision, recall, accuracy and AUC over the held-out cells (:func:`crfmap.assess.metrics.evaluate`)."""
-        from crfmap.assess.metrics import evaluate
-
         return evaluate(self.predicted, self.labels, self.held_out)
 
     def roc(self):
         """(false positive rate, true positive rate, thresholds) over the held-out cells."""
-        from crfmap.assess.metrics import roc_curve
-
         return roc_curve(self.predicted, self.labels, self.held_out)
 
     @property

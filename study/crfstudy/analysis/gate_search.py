@@ -26,6 +26,7 @@ from crfmap.assess.splits import scan_blocks, split_by, temporal_halves
 from crfmap.crf.presets import coupling_table, get_preset
 from crfmap.data import data_file
 from crfmap.io.recordings import load_recording
+from crfmap.io.atomic import atomic_path
 
 RECORDINGS = {"intel": "carmen/intel-corrected.log.gz", "aces": "carmen/aces-corrected.log.gz"}
 RESOLUTION = 0.05  # [m]
@@ -113,7 +114,6 @@ def main(argv=None) -> int:
         same = all(abs(a["weighted_logloss"] - b["weighted_logloss"]) < 1e-9 for a, b in zip(rows, cached["rows"]))
         print("cache agrees" if same and cached["best"] == {"J": chosen["J"], "pi": chosen["pi"]} else "cache DIFFERS")
         return 0 if same else 1
-    from crfmap.io.atomic import atomic_path
 
     with atomic_path(CACHE) as tmp:  # a search interrupted or a full disk leaves the old cache whole
         Path(tmp).write_text(json.dumps({"rule": "lowest mean held-out log-loss, occupied cells weighted "

@@ -24,6 +24,8 @@ import numpy as np
 
 from crfmap.assess.scansplit import score
 from crfmap.crf.presets import coupling_table, get_preset
+from crfmap.crf.inference.lbp import infer
+from crfstudy.learning import learn_pseudolikelihood
 
 CERTAINTY = "certainty"  # the model whose space is mapped (the gated default is this model plus its evidence gate)
 
@@ -45,8 +47,6 @@ def table_refine(split, coupling, link_strength, margin=None, max_iter=1000, tol
 
 def _refine(raw, region, coupling, link_strength, max_iter=1000, tol=1e-5, dtype=np.float64):
     """:func:`table_refine` given the split's raw grid and LBP region (the same for every table of a diagram)."""
-    from crfmap.crf.inference.lbp import infer
-
     result = infer(raw, coupling_table(coupling), coupling_table(link_strength), region=region, max_iter=max_iter,
                    tol=tol, dtype=dtype)
     return np.where(region, result.beliefs.probability, raw), result
@@ -120,8 +120,6 @@ def fit_scaled(split, couplings, scales, scores=None) -> tuple:
 
 def fit_pseudolikelihood(split, steps=300):
     """(hidden, link) learned by pseudo-likelihood: raw grid of the first half, second-half labels as truth."""
-    from crfmap.assess.learning import learn_pseudolikelihood
-
     mask = split.group("all")
     truth = split.labels().astype(float)
     r = learn_pseudolikelihood(split.raw_probability(), truth, mask=mask, steps=steps, progress=False,

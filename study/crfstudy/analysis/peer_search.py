@@ -20,8 +20,7 @@ widened there and the search rerun (:data:`EARLIER` records the dropped grids an
 
 The results are kept in :data:`CACHES` (``python -m crfstudy.analysis.peer_search octomap|hilbert``
 reruns one and rewrites its file; ``--check`` reruns it and compares), and copied as tables beside the
-constants they chose (:data:`crfmap.assess.peers.OCTOMAP_SEARCH_INTEL`,
-:data:`crfmap.assess.peers.HILBERT_SEARCH_INTEL`).
+constants' records here (:data:`OCTOMAP_SEARCH_INTEL`, :data:`HILBERT_SEARCH_INTEL`).
 
 >>> import numpy as np
 >>> from crfmap.assess.scansplit import scan_split
@@ -40,12 +39,14 @@ import sys
 import time
 from pathlib import Path
 
-
 from crfmap.assess.peers import hilbert_row, octomap_row
 from crfmap.errors import InputError
 from crfmap.mapping import octomap
-from crfstudy.analysis.coordinate import SearchResult, coordinate_descent
+from crfstudy.analysis.coordinate import SearchResult, coordinate_descent, check_or_write
 from crfstudy.analysis.preset_search import TRAINING, TRAINING_RESOLUTION
+from crfmap.assess.scansplit import score, scan_split
+from crfmap.io.recordings import load_recording
+from crfmap.data import data_file
 
 # OctoMap's four constants, as probabilities like OctoMap's own setters (setProbHit, setClampingThresMin, ...)
 OCTOMAP_GRID = {
@@ -56,7 +57,7 @@ OCTOMAP_GRID = {
 }
 OCTOMAP_START = {"p_hit": octomap.P_HIT, "p_miss": octomap.P_MISS, "clamp_min": octomap.CLAMP_MIN,
                  "clamp_max": octomap.CLAMP_MAX}  # the library's defaults, the row's constants before this search
-# the Hilbert map's three lengths [m]; the first grid (2026-12-02, crfmap.assess.peers.HILBERT_SEARCH_INTEL_FIRST)
+# the Hilbert map's three lengths [m]; the first grid (2026-12-02, HILBERT_SEARCH_INTEL_FIRST)
 # chose length scale 0.03 at its smallest value: this one reaches below it and around the chosen spacings
 HILBERT_GRID = {
     "length_scale": (0.015, 0.02, 0.025, 0.03, 0.0375),
@@ -79,6 +80,7 @@ EARLIER = {
          "configurations": 72, "edge": ["clamp_max"]},
     ),
     "hilbert": (
+        # (the cache's record names where the table stood then; it is :data:`HILBERT_SEARCH_INTEL_FIRST` now)
         {"grid": "crfmap.assess.peers.HILBERT_SEARCH_INTEL_FIRST (18 hand-picked settings, 2026-12-02)",
          "best": {"feature_spacing": 0.075, "length_scale": 0.03, "free_spacing": 0.075}, "best_brier": 0.0279,
          "configurations": 18, "edge": ["length_scale"]},
@@ -88,14 +90,99 @@ EARLIER = {
          "configurations": 21, "edge": ["free_spacing"]},
     ),
 }
+OCTOMAP_SEARCH_COLUMNS = ("p_hit", "p_miss", "clamp_min", "clamp_max", "brier_all")
+# the search's profile through the chosen values: each constant over its grid, the others at the chosen values
+OCTOMAP_SEARCH_INTEL = (
+    (0.8, 0.2, 0.005, 0.9999, 0.0263280),  # chosen
+    (0.55, 0.2, 0.005, 0.9999, 0.0379656),
+    (0.6, 0.2, 0.005, 0.9999, 0.0345712),
+    (0.65, 0.2, 0.005, 0.9999, 0.0315979),
+    (0.7, 0.2, 0.005, 0.9999, 0.0291624),
+    (0.9, 0.2, 0.005, 0.9999, 0.0267903),
+    (0.8, 0.1, 0.005, 0.9999, 0.0292066),
+    (0.8, 0.3, 0.005, 0.9999, 0.0271602),
+    (0.8, 0.4, 0.005, 0.9999, 0.0417298),
+    (0.8, 0.45, 0.005, 0.9999, 0.0711153),
+    (0.8, 0.2, 0.001, 0.9999, 0.0264140),
+    (0.8, 0.2, 0.01, 0.9999, 0.0263340),
+    (0.8, 0.2, 0.02, 0.9999, 0.0265234),
+    (0.8, 0.2, 0.05, 0.9999, 0.0282323),
+    (0.8, 0.2, 0.1192, 0.9999, 0.0383555),
+    (0.8, 0.2, 0.005, 0.971, 0.0267676),
+    (0.8, 0.2, 0.005, 0.99, 0.0265503),
+    (0.8, 0.2, 0.005, 0.999, 0.0263624),
+    (0.8, 0.2, 0.005, 0.99999, 0.0263284),
+    (0.8, 0.2, 0.005, 0.999999, 0.0263289),
+)
+
+# How crfmap.mapping.hilbert's constants were first chosen: hilbert_search on the Intel log's scan split at 5 cm
+# (even scans fit, odd scans score; nothing else seen), 2026-12-02. Columns: feature spacing [m], length
+# scale [m], free-point spacing [m], Brier (all observed cells), log-loss, AUC, wall recall, fit seconds
+# (on a shared, loaded 2-core machine). Rule then: the lowest Brier among fits under a minute on Intel here. Its
+# choice, length scale 0.03, was the grid's smallest: HILBERT_SEARCH_INTEL is the search that replaced it.
+HILBERT_SEARCH_COLUMNS = ("feature_spacing", "length_scale", "free_spacing", "brier_all", "logloss_all", "auc_all",
+                          "wall_recall", "seconds")
+HILBERT_SEARCH_INTEL_FIRST = (
+    (0.25, 0.25, 0.25, 0.0731, 0.981, 0.705, 0.311, 40),
+    (0.25, 0.125, 0.25, 0.0890, 1.016, 0.936, 0.698, 17),
+    (0.2, 0.2, 0.2, 0.0636, 0.851, 0.737, 0.314, 37),
+    (0.15, 0.15, 0.15, 0.0555, 0.739, 0.788, 0.314, 74),
+    (0.15, 0.1125, 0.15, 0.0582, 0.755, 0.927, 0.499, 24),
+    (0.15, 0.075, 0.15, 0.0547, 0.576, 0.966, 0.769, 17),
+    (0.1, 0.1, 0.1, 0.0486, 0.642, 0.855, 0.325, 46),
+    (0.1, 0.1, 0.2, 0.0769, 1.028, 0.924, 0.711, 17),
+    (0.1, 0.075, 0.1, 0.0446, 0.565, 0.952, 0.535, 27),
+    (0.1, 0.075, 0.05, 0.0531, 0.691, 0.896, 0.109, 86),
+    (0.1, 0.05, 0.1, 0.0371, 0.364, 0.977, 0.791, 14),
+    (0.1, 0.05, 0.15, 0.0545, 0.606, 0.975, 0.895, 22),
+    (0.1, 0.04, 0.1, 0.0344, 0.246, 0.982, 0.866, 19),
+    (0.1, 0.03, 0.1, 0.0340, 0.146, 0.981, 0.907, 26),
+    (0.075, 0.0562, 0.075, 0.0384, 0.476, 0.962, 0.554, 57),
+    (0.075, 0.0375, 0.075, 0.0307, 0.280, 0.981, 0.779, 39),
+    (0.075, 0.03, 0.075, 0.0279, 0.177, 0.985, 0.838, 20),  # chosen then
+    (0.05, 0.0375, 0.05, 0.0343, 0.411, 0.967, 0.538, 158),
+)
+
+
+# How crfmap.mapping.hilbert's constants are chosen now: hilbert_coordinate_search, the
+# preset's coordinate search by scan-split Brier (all observed cells) on Intel at 5 cm from the first grid's choice
+# (cache study/crfstudy/analysis/peer_search_hilbert_intel.json), 2026-12-04. Rows in the order scored, columns
+# HILBERT_SEARCH_COLUMNS; seconds are each fit's on a shared 2-core machine (1-7 s: no fit is excluded for its time).
+# Its first grid (free spacing 0.05-0.1) chose free spacing 0.05, its edge; this one reaches 0.025. The chosen lengths
+# have grid values on either side. Lower Brier than the first choice (0.0226 against 0.0279), at lower wall recall
+# (0.735 against 0.838): denser free points pull thin walls down. Read by nav2 on Intel (`crfmap evaluate`): lethal
+# recall 81.4 -> 66.7 %, precision 71.0 -> 81.1 %, dangerous misses 11.9 -> 14.7 %, walls 3.41 -> 2.44 cells thick.
+HILBERT_SEARCH_INTEL = (
+    (0.075, 0.03, 0.075, 0.0279, 0.177, 0.985, 0.838, 2.6),  # start: the first grid's choice
+    (0.075, 0.015, 0.075, 0.0698, 0.258, 0.953, 0.845, 1.4),
+    (0.075, 0.02, 0.075, 0.0286, 0.110, 0.978, 0.865, 2.1),
+    (0.075, 0.025, 0.075, 0.0269, 0.122, 0.985, 0.861, 1.8),
+    (0.075, 0.0375, 0.075, 0.0307, 0.280, 0.981, 0.779, 1.8),
+    (0.05, 0.025, 0.075, 0.0294, 0.268, 0.986, 0.854, 2.4),
+    (0.06, 0.025, 0.075, 0.0279, 0.193, 0.986, 0.858, 3.3),
+    (0.09, 0.025, 0.075, 0.0271, 0.103, 0.980, 0.857, 2.9),
+    (0.1, 0.025, 0.075, 0.0292, 0.106, 0.979, 0.843, 1.2),
+    (0.075, 0.025, 0.025, 0.0309, 0.133, 0.972, 0.420, 6.8),
+    (0.075, 0.025, 0.035, 0.0252, 0.100, 0.980, 0.582, 3.9),
+    (0.075, 0.025, 0.05, 0.0226, 0.087, 0.984, 0.735, 3.0),  # chosen
+    (0.075, 0.025, 0.06, 0.0235, 0.095, 0.985, 0.805, 3.1),
+    (0.075, 0.025, 0.09, 0.0312, 0.159, 0.984, 0.895, 2.4),
+    (0.075, 0.015, 0.05, 0.0667, 0.249, 0.939, 0.742, 2.0),
+    (0.075, 0.02, 0.05, 0.0239, 0.089, 0.975, 0.761, 3.3),
+    (0.075, 0.03, 0.05, 0.0255, 0.144, 0.982, 0.680, 3.4),
+    (0.075, 0.0375, 0.05, 0.0317, 0.289, 0.975, 0.563, 4.1),
+    (0.05, 0.025, 0.05, 0.0263, 0.225, 0.982, 0.720, 4.1),
+    (0.06, 0.025, 0.05, 0.0245, 0.147, 0.984, 0.725, 4.5),
+    (0.09, 0.025, 0.05, 0.0234, 0.084, 0.977, 0.732, 5.2),
+    (0.1, 0.025, 0.05, 0.0252, 0.089, 0.978, 0.719, 3.0),
+)
+
 HILBERT_DETAILS = ("seconds", "brier_unseen", "logloss_all", "auc_all", "wall_recall")  # recorded beside Brier
 CACHES = {"octomap": Path(__file__).with_name("peer_search_octomap_intel.json"),
           "hilbert": Path(__file__).with_name("peer_search_hilbert_intel.json")}
 
 
 def _brier(split, p) -> float:
-    from crfmap.assess.scansplit import score  # scansplit imports peers: here, not at the top
-
     return score(split, {"p": p}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
 
 
@@ -115,8 +202,6 @@ def octomap_search(split, grid: dict | None = None, start: dict | None = None, m
 
 def hilbert_search(split, configs, progress=False) -> list:
     """Scan-split scores of the Hilbert map for each (feature_spacing, length_scale, free_spacing) [m] in ``configs``."""
-    from crfmap.assess.scansplit import score
-
     rows = []
     for spacing, scale, free in configs:
         start = time.perf_counter()
@@ -173,10 +258,6 @@ def load_cached(peer: str, path: Path | None = None) -> dict:
 
 def training_split():
     """Intel's scan split at 5 cm (even scans map, odd scans score): the preset's training split."""
-    from crfmap.assess.scansplit import scan_split
-    from crfmap.io.recordings import load_recording
-    from crfmap.data import data_file
-
     return scan_split(load_recording(data_file(TRAINING)).scans, TRAINING_RESOLUTION)
 
 
@@ -193,8 +274,6 @@ def run_training_search(peer: str, progress: bool = True) -> dict:
 
 def main(argv=None) -> int:
     """``python -m crfstudy.analysis.peer_search octomap|hilbert [--check]``: rerun one search, (re)write or check its cache."""
-    from crfstudy.analysis.coordinate import check_or_write
-
     argv = sys.argv[1:] if argv is None else list(argv)
     if not (1 <= len(argv) <= 2 and argv[0] in SEARCHES and argv[1:] in ([], ["--check"])):
         print("usage: python -m crfstudy.analysis.peer_search octomap|hilbert [--check]", file=sys.stderr)

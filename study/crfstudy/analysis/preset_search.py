@@ -40,6 +40,11 @@ import numpy as np
 
 from crfmap.errors import InputError
 from crfstudy.analysis.coordinate import SearchResult, coordinate_descent  # noqa: F401 - SearchResult: re-exported
+from crfmap.crf.presets import coupling_table, get_preset
+from crfmap.assess.scansplit import score, scan_split
+from crfmap.io.recordings import load_recording
+from crfmap.data import data_file
+from crfstudy.analysis.coordinate import check_or_write
 
 # the grid each constant is searched on (a, c: first net hit / pass; b, d: each further one)
 GRID = {
@@ -75,8 +80,6 @@ def preset_constants(preset) -> dict:
 
 def preset_from(constants: dict, base: str | None = None):
     """The ``base`` preset (None: the certainty preset, the model this study is about) with the constants of ``constants`` (names of :data:`GRID`)."""
-    from crfmap.crf.presets import coupling_table, get_preset
-
     unknown = set(constants) - set(GRID)
     if unknown:
         raise InputError("constants", f"unknown names {sorted(unknown)}; expected some of {', '.join(GRID)}")
@@ -90,8 +93,6 @@ def preset_from(constants: dict, base: str | None = None):
 
 def search_brier(split, constants: dict, dtype=np.float32, max_iter: int = 5000) -> float:
     """Scan-split Brier score (all cells) of the preset with ``constants`` on ``split``."""
-    from crfmap.assess.scansplit import score
-
     beliefs = preset_from(constants).refine(hits=split.first_hits, passes=split.first_passes, dtype=dtype,
                                             max_iter=max_iter).beliefs.probability
     return score(split, {"p": beliefs}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
@@ -126,10 +127,6 @@ def load_cached(path: Path | None = None) -> dict:
 
 def run_training_search(progress: bool = True) -> dict:
     """The full search on the training recording (Intel, even / odd scans at 5 cm), as the cache holds it."""
-    from crfmap.assess.scansplit import scan_split
-    from crfmap.io.recordings import load_recording
-    from crfmap.data import data_file
-
     recording = load_recording(data_file(TRAINING))
     split = scan_split(recording.scans, TRAINING_RESOLUTION)
     result = coordinate_search(split, progress=progress).as_dict()
@@ -138,8 +135,6 @@ def run_training_search(progress: bool = True) -> dict:
 
 def main(argv=None) -> int:
     """``python -m crfstudy.analysis.preset_search [--check]``: rerun the search on Intel and (re)write or check the cache."""
-    from crfstudy.analysis.coordinate import check_or_write
-
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv not in ([], ["--check"]):
         print("usage: python -m crfstudy.analysis.preset_search [--check]", file=sys.stderr)

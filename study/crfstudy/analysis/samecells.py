@@ -28,6 +28,7 @@ import numpy as np
 from crfmap.assess.scansplit import DEFAULT_BLOCK
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
+from crfmap.assess.paired import paired_difference
 
 METRICS = ("precision", "recall", "accuracy")
 
@@ -82,8 +83,6 @@ def fold_scores(predictions: dict, labels, held_out, folds, reference: str, n_bo
     "per_fold", metric: {"fold_mean", "fold_ci"}, "vs_reference": {metric: paired_difference}}}}``;
     accuracy-like metrics: higher is better.
     """
-    from crfmap.assess.paired import paired_difference
-
     if reference not in predictions:
         raise InputError("reference", f"{reference!r} is not one of the predictions")
     common = common_mask(predictions, held_out)

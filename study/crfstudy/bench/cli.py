@@ -3,6 +3,10 @@ from __future__ import annotations
 
 import argparse
 
+import numba
+
+from crfmap.errors import InputError
+
 
 def add_parser(sub):
     p = sub.add_parser(
@@ -31,10 +35,7 @@ def add_parser(sub):
 
 
 def run(args: argparse.Namespace) -> int:
-    import numba
-
     from crfstudy.bench.suite import format_record, run as run_bench, to_json
-    from crfmap.errors import InputError
 
     if args.sizes and any(n < 16 or n > 32768 for n in args.sizes):
         raise InputError("--sizes", f"grid sides must be between 16 and 32768 cells, got {args.sizes}")

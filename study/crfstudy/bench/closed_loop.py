@@ -10,6 +10,9 @@ from __future__ import annotations
 import time
 
 from crfstudy.bench.common import record
+from crfmap.world.office import office_floor
+from crfstudy.closed_loop.exploration import ExploreSettings, explore
+from crfstudy.closed_loop.onboard import ONBOARD_MAPS
 
 FLOOR = (12.0, 10.0)  # [m] notebook 11's floor
 RESOLUTION = 0.1  # [m]
@@ -17,10 +20,6 @@ RESOLUTION = 0.1  # [m]
 
 def bench_closed_loop(quick=False, seed=0) -> list:
     """One record per onboard map kind (``closed-loop-<kind>``); ``quick``: the raw grid and the online CRF only."""
-    from crfmap.world.office import office_floor
-    from crfstudy.closed_loop.exploration import ExploreSettings, explore
-    from crfstudy.closed_loop.onboard import ONBOARD_MAPS
-
     scene = office_floor(*FLOOR, RESOLUTION, seed=seed)
     kinds = ["raw", "online-crf"] if quick else list(ONBOARD_MAPS)
     out = []

@@ -7,6 +7,9 @@ import time
 
 import numpy as np
 
+from crfmap.world.scenes import noisy_image
+from crfmap.world.office import office_floor
+
 SIZES = (256, 512, 1024, 2048, 4096, 8192)
 QUICK_SIZES = (128, 256)
 CONVERGE_SIZES = (256, 512, 1024, 2048, 4096)
@@ -32,8 +35,6 @@ def bench_grid(size, seed=0, kind="uniform") -> np.ndarray:
     """
     if kind == "uniform":
         return np.random.default_rng(seed).uniform(0.0, 1.0, (size, size))
-    from crfmap.world.scenes import noisy_image
-    from crfmap.world.office import office_floor
 
     side = max(size, 128)  # an office needs a few metres; small grids are a corner of one
     scene = office_floor(side * 0.05, side * 0.05, 0.05, seed=seed)

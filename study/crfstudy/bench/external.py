@@ -39,8 +39,9 @@ import warnings
 
 import numpy as np
 
-from crfmap.assess.mincut import crf_energy, floored_unary, graph_cut_map
+from crfmap.assess.mincut import floored_unary, graph_cut_map
 from crfstudy.bench.common import median_time, bench_grid, record
+from crfstudy.references import crf_energy
 from crfmap.crf.engine.messages import MESSAGE_FLOOR
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.schedules import Flooding

@@ -46,6 +46,18 @@ from pathlib import Path
 import numpy as np
 
 from crfstudy.bench.common import CONVERGE_TOL, bench_grid, median_time, record
+from crfstudy.experiments.explorer_panel import ExplorerPanel
+from crfstudy.experiments import explorer
+from crfstudy.experiments.explorer_view import ExplorerView
+from crfstudy import paths
+from crfstudy.repro.buildinfo import wall_record
+from crfmap.errors import DataMissingError, InputError
+from crfmap.data import data_file
+from crfmap.io.carmen import read_carmen
+from crfmap.mapping.builder import build_grid
+from crfstudy.bench.baseline import NumpyCheckerboard
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+from crfmap.crf.inference.lbp import infer
 
 INFER_GOAL = 0.8  # end-to-end / kernel per-iteration throughput
 START_GOAL = 2.0  # [s] first `crfmap infer` minus a warm one, caches warmed by make
@@ -172,8 +184,6 @@ def start_times(quick=False, cold=None) -> list:
 
 def explorer_redraw(changes=12) -> list:
     """Median time from a widget change to the new PNG, headless, over ``changes`` changes."""
-    from crfstudy.experiments.explorer_panel import ExplorerPanel
-
     panel = ExplorerPanel()
     t = time.perf_counter()
     panel.warm_up()
@@ -193,9 +203,6 @@ def explorer_redraw(changes=12) -> list:
         return float(np.median([r[key] for r in rows]))
 
     # the way it was drawn before (a new figure per change, laid out and fully drawn): same run, for the ratio
-    from crfstudy.experiments import explorer
-    from crfstudy.experiments.explorer_view import ExplorerView
-
     ex = explorer.run()
     full = []
     for _ in range(3):
@@ -229,9 +236,6 @@ def reproduce_record(path=None, wall_path=None) -> dict:
     as new as the timings (from the start of ``make reproduce`` if make passed it, else the
     workflow's own), otherwise the notebooks' summed run times.
     """
-    from crfstudy import paths
-    from crfstudy.repro.buildinfo import wall_record
-
     path = Path(path or paths.GENERATED / "reproduce_timings.json")
     if not path.exists():
         return record("reproduce", None, None, None, None, seconds=None, goal_seconds=REPRODUCE_GOAL,
@@ -265,14 +269,9 @@ def reproduce_record(path=None, wall_path=None) -> dict:
 
 def _preset_map(name, quick):
     """(observed P grid, what it is) for :data:`PRESET_MAPS`, or (None, why not) when its data is missing."""
-    from crfmap.errors import DataMissingError
-
     if name == "office":
         size = QUICK_PRESET_OFFICE_SIZE if quick else PRESET_OFFICE_SIZE
         return bench_grid(size, kind="office"), f"synthetic office floor {size}², flip noise 0.2"
-    from crfmap.data import data_file
-    from crfmap.io.carmen import read_carmen
-    from crfmap.mapping.builder import build_grid
 
     try:
         path = data_file(f"carmen/{name}-corrected.log.gz")
@@ -284,9 +283,6 @@ def _preset_map(name, quick):
 
 def preset_converge(quick=False, maps=None, threads=None) -> list:
     """The default preset to convergence vs :data:`PRESET_GOAL_ITERATIONS` NumPy-baseline iterations (see above)."""
-    from crfstudy.bench.baseline import NumpyCheckerboard
-    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
-
     preset = get_preset(DEFAULT_PRESET)
     out = []
     for name in maps or (("office",) if quick else PRESET_MAPS):
@@ -332,9 +328,6 @@ def coarse_start_option():
     then differs from the uniform start's (``start`` exists for the thesis schedule's corner and
     the checkerboard ignores it).
     """
-    from crfmap.crf.inference.lbp import infer
-    from crfmap.errors import InputError
-
     accepted = inspect.signature(infer).parameters
     probe = bench_grid(256, kind="office")  # large enough to have a coarser level
     uniform = infer(probe, max_iter=1, tol=0.0).beliefs.probability
@@ -357,8 +350,6 @@ def converge_start(size, threads, tol=CONVERGE_TOL, max_iter=5000, runs=2) -> li
     of ``runs`` timed runs on the full grid is kept; ``first_run_seconds`` is the first of them,
     which also pays for touching the grid-sized buffers for the first time in the process.
     """
-    from crfmap.crf.inference.lbp import infer
-
     obs = bench_grid(size, kind="office")
     starts = {"uniform": {}}
     option = coarse_start_option()

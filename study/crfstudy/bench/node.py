@@ -23,6 +23,16 @@ from pathlib import Path
 import numpy as np
 
 from crfstudy.bench.common import INTEL, record
+from crfmap.data import data_file, have_data
+from crfmap.io.carmen import read_carmen
+from crfmap.io.grid_files import load_grid
+from crfmap.mapping import build_grid
+from crfmap.ros import dds_types, qos
+from crfmap.ros.dds import dds_qos, native_message
+from crfmap.ros.messages import grid_out
+from crfmap.io.bag_reader import read_bag
+from crfmap.mapping.builder import scan_bounds
+from crfmap.ros.node import MapNode
 
 OLIN_MAP = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"
 OLIN_BAG = "rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2"
@@ -34,11 +44,6 @@ TIMEOUT = 600.0  # [s] per map, for a loaded machine
 
 
 def _maps(quick):
-    from crfmap.data import data_file, have_data
-    from crfmap.io.carmen import read_carmen
-    from crfmap.io.grid_files import load_grid
-    from crfmap.mapping import build_grid
-
     out = {}
     if have_data(INTEL):
         out["intel"] = build_grid(read_carmen(data_file(INTEL)).scans, 0.1 if quick else 0.05)
@@ -94,10 +99,6 @@ def _time_refine(name, grid, repeats, node, log):
     from cyclonedds.sub import DataReader
     from cyclonedds.topic import Topic
 
-    from crfmap.ros import dds_types, qos
-    from crfmap.ros.dds import dds_qos, native_message
-    from crfmap.ros.messages import grid_out
-
     participant = DomainParticipant(int(os.environ["ROS_DOMAIN_ID"]))
     writer = DataWriter(participant, Topic(participant, "rt/map", dds_types.OccupancyGrid), qos=dds_qos(qos.MAP))
     reader = DataReader(participant, Topic(participant, "rt/map_refined", dds_types.OccupancyGrid),
@@ -133,16 +134,10 @@ def _time_refine(name, grid, repeats, node, log):
 
 def bench_node_map(quick=False):
     """Row ``node-map-olin``: scans per second the map mode's core sustains on the Olin bag."""
-    from crfmap.data import data_file, have_data
-
     if not have_data(OLIN_BAG):
         return [record("node-map-olin", note="skipped: the shared data was not found")]
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
-
-    from crfmap.io.bag_reader import read_bag
-    from crfmap.mapping.builder import scan_bounds
-    from crfmap.ros.node import MapNode
 
     bag = data_file(OLIN_BAG)
     bounds = scan_bounds(read_bag(bag).scans)

@@ -8,6 +8,10 @@ import numpy as np
 from crfstudy.bench.common import EQUALITY_TABLE, INTEL, ONLINE_MARGIN, median_time, record
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN
+from crfmap.data import data_file, have_data
+from crfmap.mapping.builder import build_grid
+from crfmap.io.carmen import read_carmen
+from crfmap.mapping.online import OnlineMapper
 
 
 def bench_online(quick=False, progress=False, final_tol=None):
@@ -16,11 +20,6 @@ def bench_online(quick=False, progress=False, final_tol=None):
     ``final_tol``: the largest message change at which both final maps stop (default 1e-7, quick
     1e-5); the record keeps it beside their largest difference.
     """
-    from crfmap.data import data_file, have_data
-    from crfmap.mapping.builder import build_grid
-    from crfmap.io.carmen import read_carmen
-    from crfmap.mapping.online import OnlineMapper
-
     if not have_data(INTEL):
         return [record("online-intel", note=f"skipped: {INTEL} not found")]
     scans = read_carmen(data_file(INTEL)).scans

@@ -10,6 +10,11 @@ from __future__ import annotations
 import time
 
 from crfstudy.bench.common import record
+from crfmap.data import data_file, have_data
+from crfmap.assess.peers import PEERS, peer_rows
+from crfmap.assess.scansplit import scan_split
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+from crfmap.io.carmen import read_carmen
 
 RECORDINGS = {"intel": "carmen/intel-corrected.log.gz", "aces": "carmen/aces-corrected.log.gz",
               "csail": "carmen/csail-corrected.log.gz", "fr101": "carmen/freiburg-101-corrected.log.gz"}
@@ -17,12 +22,6 @@ RECORDINGS = {"intel": "carmen/intel-corrected.log.gz", "aces": "carmen/aces-cor
 
 def bench_peers(quick=False, resolution=0.05):
     """One record per recording present and method: ``seconds`` to map the even scans, grid ``shape``."""
-    from crfmap.data import data_file, have_data
-    from crfmap.assess.peers import PEERS, peer_rows
-    from crfmap.assess.scansplit import scan_split
-    from crfmap.crf.presets import DEFAULT_PRESET, get_preset
-    from crfmap.io.carmen import read_carmen
-
     names = ["intel"] if quick else list(RECORDINGS)
     methods = ["octomap"] if quick else list(PEERS)
     out = []

@@ -45,6 +45,7 @@ import os
 import subprocess
 import sys
 import time
+import tempfile
 
 import numpy as np
 
@@ -72,6 +73,7 @@ from crfstudy.bench.common import (
     QUICK_WORK,
 )
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, directional_tables
+from crfstudy.bench import goals as G
 
 PLAIN = Checkerboard(kernel="plain")  # the reference kernels
 
@@ -212,8 +214,6 @@ def compile_seconds(cold=True) -> dict:
     ``cold``: with an empty numba cache (JIT compilation); else with the package's own cache
     (what every later process pays).
     """
-    import tempfile
-
     code = (
         "import time, numpy as np\n"
         "from crfmap.crf.inference.lbp import infer\n"
@@ -289,7 +289,6 @@ def run(sizes=None, quick=False, repeats=None, threads=(1, 2), progress=True, on
         tasks += [("online", None)] + ([("node", None)] if node else []) + [("closed-loop", None)]
     if external:
         tasks.append(("external", None))
-    from crfstudy.bench import goals as G
 
     converge_start_size = converge_start_size or (G.QUICK_CONVERGE_GOAL_SIZE if quick else G.CONVERGE_GOAL_SIZE)
     if goals:

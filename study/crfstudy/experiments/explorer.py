@@ -23,6 +23,7 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass, field
 from functools import lru_cache
+import time
 
 import numpy as np
 
@@ -35,6 +36,11 @@ from crfmap.crf.inference.result import LBPResult
 from crfmap.crf.inference.schedules import SCHEDULES, Checkerboard
 from crfmap.assess.metrics import Report, evaluate
 from crfmap.crf.presets import DEFAULT_PRESET, Preset, custom_preset, get_preset
+from crfmap.world import scenes
+from crfmap.world.office import office_floor
+from crfmap.mapping.builder import build_grid
+from crfmap.sim.simulator import simulate
+from crfstudy.experiments.explorer_view import ExplorerView
 
 EXPLORER_SCENES = ("x", "occluded-train", "occluded-test", "enclosed-train", "enclosed-test",
                    "hollow-train", "hollow-test", "office")
@@ -92,14 +98,9 @@ def _check_seed(seed):
 
 @lru_cache(maxsize=32)
 def _observe(scene, noise, seed):
-    from crfmap.world import scenes
-    from crfmap.world.office import office_floor
-
     if scene == "x":
         made = scenes.x_image()
         return Observation(made, scenes.noisy_image(made.truth, noise, seed=seed), noise, "image sigma", seed)
-    from crfmap.mapping.builder import build_grid
-    from crfmap.sim.simulator import simulate
 
     if scene == "office":
         made = office_floor(*OFFICE_SIZE, resolution=OFFICE_RESOLUTION, seed=seed)
@@ -223,8 +224,6 @@ def warm_up(schedules=SCHEDULES, on_schedule=None) -> dict:
     >>> sorted(warm_up(["thesis"]))
     ['thesis']
     """
-    import time
-
     rng = np.random.default_rng(0)
     grid = OccupancyGrid(rng.uniform(0.05, 0.95, (WARM_UP_SIZE, WARM_UP_SIZE)), resolution=0.1)
     inner = np.zeros(grid.shape, dtype=bool)
@@ -256,8 +255,6 @@ def draw(ex: Exploration):
     An ordinary :class:`matplotlib.figure.Figure`; the live panel updates one figure in place
     instead (:class:`crfstudy.experiments.explorer_view.ExplorerView`).
     """
-    from crfstudy.experiments.explorer_view import ExplorerView
-
     return ExplorerView(live=False).update(ex).figure
 
 

@@ -22,6 +22,9 @@ import io
 
 import numpy as np
 
+from crfstudy.plotting import OCCUPANCY_CMAP
+from crfmap.assess.metrics import roc_curve
+
 FIGSIZE = (17, 4.4)  # [inch] four panels side by side
 DPI = 90  # what the explorer has always shown; 1530 x 396 pixels
 PNG_LEVEL = 1  # zlib level: ~3x faster than matplotlib's default, files ~10 % larger
@@ -83,8 +86,6 @@ class ExplorerView:
     def _build(self):
         from matplotlib.patches import Circle
 
-        from crfstudy.plotting import OCCUPANCY_CMAP
-
         fig = self.figure
         axes = fig.subplots(1, 4, gridspec_kw={"width_ratios": [1, 1, 1, 1.05]})
         a = self._artists
@@ -141,8 +142,6 @@ class ExplorerView:
     # --- updating (every change) ------------------------------------------------------------------
     def update(self, ex):
         """Show the exploration ``ex`` (a :class:`crfstudy.experiments.explorer.Exploration`); returns self."""
-        from crfmap.assess.metrics import roc_curve
-
         truth = ex.truth
         a = self._artists
         a["before"].set_data(ex.observation.observed.probability)

@@ -13,11 +13,18 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import asdict, dataclass, replace
+import time
 
 import numpy as np
 
 from crfstudy import paths
-from crfmap.crf.presets import DEFAULT_PRESET
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+from crfmap.assess.peers import OCTOMAP_INTEL, hilbert_row, peer_rows
+from crfmap.mapping import hilbert
+from crfmap.io.atomic import atomic_path
+from crfmap.assess.calibration import apply_temperature, split_calibration
+from crfmap.assess.scansplit import score
+from crfstudy.experiments.beyond_figures import densest_window
 
 # The two buildings beyond the four recordings of the other sections: CARMEN logs from Radish, nothing tuned on them.
 MORE_RECORDINGS = {"csail": "carmen/csail-corrected.log.gz", "fr101": "carmen/freiburg-101-corrected.log.gz"}
@@ -47,9 +54,6 @@ QUICK = PeerSettings(hilbert_scan_step=4, feature_spacing=0.15, length_scale=0.0
 
 
 def _key(split, name, settings=FULL) -> str:
-    from crfmap.assess.peers import OCTOMAP_INTEL
-    from crfmap.mapping import hilbert
-
     h = hashlib.sha256()
     scans = split.first_scans
     for a in (scans.ranges, scans.laser_poses):
@@ -65,10 +69,6 @@ def _key(split, name, settings=FULL) -> str:
 
 def _fit(split, name, settings, progress):
     """({name: P}, {name: seconds}) of one peer on ``split`` with ``settings``."""
-    import time
-
-    from crfmap.assess.peers import hilbert_row, peer_rows
-
     if name != "hilbert" or settings == FULL:
         return peer_rows(split, [name], progress=progress)
     start = time.perf_counter()
@@ -83,8 +83,6 @@ def cached_peer_rows(label, split, methods=("octomap", "hilbert"), progress=Fals
 
     ``quick``: the :data:`QUICK` settings (a light Hilbert fit, for CI), else :data:`FULL`.
     """
-    from crfmap.io.atomic import atomic_path
-
     settings = QUICK if quick else FULL
     folder = paths.OUT / "cache" / "peers"
     rows, seconds = {}, {}
@@ -104,8 +102,6 @@ def cached_peer_rows(label, split, methods=("octomap", "hilbert"), progress=Fals
 
 def preset_rows(split) -> dict:
     """{name: P} of every preset row of the table (:data:`PRESET_ROWS`) on a split's first half, as users run them."""
-    from crfmap.crf.presets import get_preset
-
     return {name: get_preset(name).refine(hits=split.first_hits, passes=split.first_passes).beliefs.probability
             for name in PRESET_ROWS}
 
@@ -113,9 +109,6 @@ def preset_rows(split) -> dict:
 def score_all(split, predictions, n_boot, block, seed, temperature=None):
     """Scores with paired differences to the analysed model (``scores``) and to each preset row (``versus``, by
     preset), calibration of every scored row, and (given T) the tempered analysed model ``<ANALYSED>-T``."""
-    from crfmap.assess.calibration import apply_temperature, split_calibration
-    from crfmap.assess.scansplit import score
-
     preds = {n: p for n, p in predictions.items() if n in TABLE_ROWS}
     if temperature is not None:
         preds[f"{ANALYSED}-T"] = apply_temperature(preds[ANALYSED], temperature)
@@ -216,6 +209,4 @@ def maps_figure(predictions, window, label):
 
 def busiest_window(split, side=200):
     """The ``side`` x ``side`` cell window with the most cells the first half observed (coarse search)."""
-    from crfstudy.experiments.beyond_figures import densest_window
-
     return densest_window(split.first_hits + split.first_passes > 0, side)

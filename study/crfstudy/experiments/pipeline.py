@@ -29,16 +29,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from crfmap.mapping.builder import build_grid
-from crfmap.checks import check_pair
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.result import LBPResult
-from crfmap.assess.learning import LearningResult, learn_gradient, lbp_mse, rescale
+from crfstudy.learning import LearningResult, check_pair, learn_gradient, lbp_mse, rescale
 from crfmap.assess.metrics import Report, evaluate, roc_curve
 from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.recording import Recording
 from crfmap.world.scene import Scene
+from crfmap.sim.simulator import simulate
 
 # LBP on these 40 x 40 grids: one numba thread is faster than several (the work per
 # iteration is tiny) and keeps timings steady on a shared machine.
@@ -82,8 +82,6 @@ def scan_scene(scene: Scene, laser=None, drive=None, *, model="arctan", seed=0, 
         The grid has the truth's shape, resolution and origin; cells never seen are 0.5.
         The laser poses are the true ones (perfect odometry, as in the thesis).
     """
-    from crfmap.sim.simulator import simulate
-
     if not isinstance(scene, Scene):
         raise InputError("scene", f"expected a crfmap.world.scene.Scene, got {type(scene).__name__}")
     recording: Recording = simulate(scene, laser, drive, seed=seed, progress=progress, **simulate_options)
@@ -175,7 +173,7 @@ def search_tables(observed, truth, strengths=SEARCH_STRENGTHS, biases=SEARCH_BIA
 
 def learn_search_gradient(observed, truth, *, strengths=SEARCH_STRENGTHS, biases=SEARCH_BIASES, lbp_options=None,
                           progress=True, **gradient_options) -> LearningResult:
-    """Coarse search (:func:`search_tables`), then :func:`crfmap.assess.learning.learn_gradient` from its best point.
+    """Coarse search (:func:`search_tables`), then :func:`crfstudy.learning.learn_gradient` from its best point.
 
     ``mse_before`` is the MSE of the default tables, ``mse_after`` the learned one; ``trace``
     starts with one row per searched (a, b), then the gradient learner's rows.

@@ -25,10 +25,12 @@ True
 from __future__ import annotations
 
 import importlib.util
+from dataclasses import replace
 
 import numpy as np
 
 from crfmap.assess.metrics import evaluate
+from crfmap.assess.mincut import graph_cut_map
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.errors import InputError
@@ -36,6 +38,9 @@ from crfmap.frames import compose
 from crfmap.grid import UNKNOWN, OccupancyGrid
 from crfmap.mapping.builder import build_grid
 from crfmap.world.scenes import enclosed_boxes, occluded_walls
+from crfstudy.experiments.pipeline import truth_bounds
+from crfmap.sim.simulator import simulate
+from crfstudy.learning import learn_gradient
 
 KINDS = ("occluded", "enclosed", "hollow")
 # The thesis's noise model (sec. 3.1): ranges d +- C, C ~ U[0, bound]; odometry steps +- C as well.
@@ -61,8 +66,6 @@ def room(kind: str, seed: int):
 
 def odometry_scans(recording):
     """The recording's scans with the laser poses the *odometry* gives (map <- odom <- base <- laser)."""
-    from dataclasses import replace
-
     odo = recording.odometry
     at = np.clip(np.searchsorted(odo.stamps, recording.scans.stamps - 1e-9), 0, len(odo.stamps) - 1)
     base = compose(np.asarray(recording.meta["map_to_odom"], float), odo.poses[at])
@@ -71,8 +74,6 @@ def odometry_scans(recording):
 
 def padded_grid(scans, truth: OccupancyGrid, model="arctan", pad=PAD_CELLS) -> OccupancyGrid:
     """The grid of ``scans`` over the truth's cells; built ``pad`` cells wider, so drifted poses still fit."""
-    from crfstudy.experiments.pipeline import truth_bounds
-
     x0, y0, x1, y1 = truth_bounds(truth)
     margin = pad * truth.resolution
     wide = build_grid(scans, truth.resolution, model=model, bounds=(x0 - margin, y0 - margin, x1 + margin, y1 + margin))
@@ -107,8 +108,6 @@ def baselines(scans, truth, observed) -> dict:
            "log-odds grid (no LBP)": padded_grid(scans, truth, model="logodds"),
            "3x3 neighbour mean": neighbour_mean3(observed)}
     if graph_cut_available():
-        from crfmap.assess.mincut import graph_cut_map
-
         occupied, _ = graph_cut_map(observed.probability, DEFAULT_HIDDEN, DEFAULT_LINK)
         out["graph-cut MAP (default tables)"] = observed.with_probability(occupied.astype(float))
     return out
@@ -152,8 +151,6 @@ def score_methods(predictions: dict, truth: OccupancyGrid, observed: OccupancyGr
 def scan_room(kind: str, seed: int, drive=None, laser=None, range_noise=RANGE_NOISE,
               odometry_noise=ODOMETRY_NOISE) -> tuple:
     """(scene, scans with odometry poses, arctan grid over the truth's cells) of one generated room."""
-    from crfmap.sim.simulator import simulate
-
     scene = room(kind, seed)
     rec = simulate(scene, laser, drive, seed=seed, range_noise=range_noise, odometry_noise=odometry_noise,
                    progress=False)
@@ -164,8 +161,6 @@ def scan_room(kind: str, seed: int, drive=None, laser=None, range_noise=RANGE_NO
 def learn_on_room(kind: str, seed: int, steps=20, drive=None, laser=None, range_noise=RANGE_NOISE,
                   odometry_noise=ODOMETRY_NOISE):
     """The gradient learner (converged LBP, from the default tables) on one noisy training room."""
-    from crfmap.assess.learning import learn_gradient
-
     scene, _, observed = scan_room(kind, seed, drive, laser, range_noise, odometry_noise)
     return learn_gradient(observed, scene.truth, steps=steps, lbp_options=TO_CONVERGENCE, progress=False)
 

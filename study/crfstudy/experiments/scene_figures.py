@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from crfmap.errors import InputError
 from crfstudy.plotting import show_grid
 
 
@@ -29,8 +30,6 @@ def landscape_figure(landscape, strengths, biases, title):
 
     landscape = np.asarray(landscape, dtype=float)
     if landscape.shape != (len(strengths), len(biases)):
-        from crfmap.errors import InputError
-
         raise InputError("landscape", f"shape {landscape.shape}, expected (strengths, biases) = "
                                       f"({len(strengths)}, {len(biases)})")
     fig, ax = plt.subplots(figsize=(6, 4.4), layout="constrained")

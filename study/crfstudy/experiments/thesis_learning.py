@@ -11,9 +11,11 @@ Both notebooks learn tables on a TRAIN room with three learners under two LBP se
 """
 from __future__ import annotations
 
-from crfmap.assess.learning import learn_gradient, learn_thesis
+from crfstudy.learning import learn_gradient, learn_thesis
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfstudy.experiments.pipeline import THESIS_TWO_ITERATIONS, TO_CONVERGENCE, learn_search_gradient, metric_row
+from crfmap.crf.inference.lbp import infer
+from crfstudy.experiments import rooms
 
 SETTINGS = {"converged": TO_CONVERGENCE, "thesis 2 iterations": THESIS_TWO_ITERATIONS}
 LEARNER_LABEL = {"default": "without learning", "thesis": "with learning (thesis's learner)",
@@ -103,9 +105,6 @@ def results_summary(run, env: str) -> dict:
 def same_cells_predictions(run, env: str, scans, truth, grid) -> dict:
     """name -> grid: the baselines of :func:`crfstudy.experiments.rooms.baselines`, every LBP run of ``run`` on
     room ``env``, and converged LBP with each learner's tables under the proper pairwise ("oriented") pairing."""
-    from crfmap.crf.inference.lbp import infer
-    from crfstudy.experiments import rooms
-
     predictions = rooms.baselines(scans, truth, grid)
     names = learner_names(run)
     for setting in run.lbp_settings:

@@ -17,6 +17,7 @@ import json
 import re
 from functools import lru_cache
 from pathlib import Path
+import importlib
 
 from crfstudy import paths
 from crfmap.errors import InputError
@@ -32,7 +33,6 @@ def _package_root(package: str) -> Path:
     checkout = paths.PROJECT_ROOT.joinpath(*PACKAGES[package])
     if checkout.is_dir():
         return checkout
-    import importlib
 
     return Path(importlib.import_module(package).__file__).resolve().parent
 

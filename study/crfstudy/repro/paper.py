@@ -34,8 +34,9 @@ import json
 import os
 import re
 from pathlib import Path
-
 import sys
+import time
+import argparse
 
 from crfstudy import paths
 from crfmap import environment
@@ -105,8 +106,6 @@ def this_run_row(cells: list, seconds: float | None, what: str) -> list:
 def this_run_seconds(notebook_seconds: float | None = None) -> tuple:
     """(seconds, what) of this reproduction when the paper is built: the time since ``make reproduce`` started
     (``$CRFMAP_REPRODUCE_STARTED``, set by make), else the executed notebooks' summed run times, else (None, "")."""
-    import time
-
     started = environment.reproduce_started()
     if started is not None:
         return time.time() - started, "from its start to this report (venv, warm-up, notebooks)"
@@ -247,8 +246,8 @@ def attach_caption(table_text: str) -> str:
 # Code names that generated tables carry (notebook labels, parameter names), and the plain words the report
 # prints instead: a reader of the PDF should not need the library's identifiers. Longer names first.
 PLAIN_WORDS = (
-    ("crfmap.assess.learning.learn_thesis, ", ""),
-    ("LBP crfmap.crf.inference.reference.reference_lbp", "LBP (crfmap's reference implementation)"),
+    ("crfstudy.learning.learn_thesis, ", ""),
+    ("LBP crfstudy.references.reference_lbp", "LBP (crfmap's reference implementation)"),
     ("reference_lbp", "reference LBP"),
     ("learn_pseudolikelihood", "pseudo-likelihood learner"),
     ("learn_gradient", "gradient learner"),
@@ -433,8 +432,6 @@ def build_paper(template: Path | None = None, output: Path | None = None, strict
 
 def main(argv=None) -> int:
     """``python -m crfstudy.repro.paper``: build the paper from full default runs (the workflow's paper rule)."""
-    import argparse
-
     parser = argparse.ArgumentParser(prog="python -m crfstudy.repro.paper", description=main.__doc__)
     parser.add_argument("--template", type=Path, help="default: paper/paper.md")
     parser.add_argument("--output", type=Path, help="default: paper/generated/paper.md")

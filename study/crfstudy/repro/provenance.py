@@ -20,6 +20,10 @@ import os
 import sys
 from pathlib import Path
 
+from crfmap import environment
+from crfstudy import paths
+from crfstudy.repro.dependencies import parameter_defaults
+
 KEY = "_provenance"  # in JSON results
 PNG_KEY = "crfmap-provenance"  # PNG text chunk
 MD_PREFIX = "<!-- crfmap-provenance: "
@@ -44,10 +48,6 @@ def current() -> dict:
     >>> sorted(current())
     ['notebook', 'parameters', 'quick']
     """
-    from crfmap import environment
-    from crfstudy import paths
-    from crfstudy.repro.dependencies import parameter_defaults
-
     namespace = vars(sys.modules.get("__main__", object()))
     given = environment.run_context()
     if given:
@@ -110,9 +110,6 @@ def problem(path) -> str | None:
 
     A result is default when every parameter it records equals the notebook's ``parameters`` cell.
     """
-    from crfstudy import paths
-    from crfstudy.repro.dependencies import parameter_defaults
-
     stamp = read(path)
     if stamp is None:
         return f"{path}: records no run parameters (saved by an older crfmap or by hand); rerun its notebook"

@@ -21,12 +21,15 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+import json
 
 from crfstudy import paths
-
 from crfmap.data import data_file
 from crfmap.errors import CrfmapError, DataMissingError, one_line
 from crfstudy.repro.dependencies import data_needed, notebooks
+from crfmap.environment import whole_number
+from crfmap import environment
+from crfmap.io.atomic import atomic_path
 
 
 def snakefile() -> Path:
@@ -76,8 +79,6 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _positive(text) -> int:
-    from crfmap.environment import whole_number
-
     try:
         return whole_number("--max-points", text, "points")
     except CrfmapError as exc:
@@ -117,8 +118,6 @@ def main(argv=None) -> int:
 
 
 def _cores(text) -> int:
-    from crfmap.environment import whole_number
-
     try:
         return whole_number("--cores", text, "cores")
     except CrfmapError as exc:
@@ -126,8 +125,6 @@ def _cores(text) -> int:
 
 
 def _reproduce(args) -> int:
-    from crfmap import environment
-
     environment.prepare()  # before snakemake's jobs import numba, which reads NUMBA_NUM_THREADS once
     todo = [] if args.sweep and not args.only else notebooks(args.only)
     loaded = []
@@ -182,6 +179,7 @@ def _reproduce(args) -> int:
 
 def estimate(sweep, cores) -> str:
     """What a sweep will run and about how long it takes (each point as long as the notebook's last full run)."""
+    # here, not at the top: timings imports numba, which must come after environment.prepare() (NUMBA_NUM_THREADS)
     from crfstudy.repro.timings import BENCHMARKS, describe, expected_seconds
 
     points = len(sweep.points())
@@ -202,10 +200,7 @@ def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None, new
     top-level fields are the last run's; ``runs`` lists every run recorded there, oldest first, so a
     fresh clone's first run (``new_venv``) stays on record after quick reruns.
     """
-    import json
-
-    from crfmap.io.atomic import atomic_path
-    from crfstudy.repro.buildinfo import wall_record
+    from crfstudy.repro.buildinfo import wall_record  # imports numba: after environment.prepare(), as timings
 
     path = Path(path or paths.OUT / "logs" / "reproduce_wall.json")
     now = time.time()

@@ -22,6 +22,9 @@ import shutil
 import sys
 from pathlib import Path
 
+from crfmap import environment
+from crfmap.errors import CrfmapError
+
 
 THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -79,8 +82,6 @@ def main(argv=None) -> int:
     parser.add_argument("--log", type=Path, help="the executed notebook as it runs (kept on failure)")
     parser.add_argument("--threads", type=int, help="most threads the kernel's numba/OpenMP/BLAS may use")
     args = parser.parse_args(argv)
-    from crfmap import environment
-    from crfmap.errors import CrfmapError
 
     try:  # the kernel inherits the environment: its numba reads NUMBA_NUM_THREADS once, at import
         environment.prepare()

@@ -8,6 +8,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from crfstudy.repro.report import markdown_table
+
 # a fresh-clone full run on 2 cores, 2026-12-03 13:31 [s]
 EXPECTED_SECONDS = {"01_background": 26, "02_worked_example": 19, "03_simulator": 29, "04_denoising": 44,
                     "05_occlusion": 31, "06_enclosed": 35, "07_office": 75, "08_explorer": 9, "09_speed": 73,
@@ -92,7 +94,6 @@ def slowest_cells_table(executed, n=5, width=60) -> str:
     rows = slowest_cells(executed, n)
     if not rows:
         return f"no executed notebooks under {executed}"
-    from crfstudy.repro.report import markdown_table
 
     def code(text):
         text = text if len(text) <= width else text[:width - 3] + "..."

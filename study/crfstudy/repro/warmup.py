@@ -29,12 +29,12 @@ import tempfile
 import time
 from pathlib import Path
 
+# Only the standard library at the top, everything else inside the functions: `make venv` runs this file as a script
+# (``--requirements``) before anything is installed, and the warm-up while pip installs the rest (NEEDS).
+
 # the distributions the tasks import (tests/repro/test_warmup.py checks it): `make venv` installs these first, then
 # warms the cache while pip installs the rest (run as a script, ``--requirements`` names them with pyproject's versions)
 NEEDS = ("numpy", "numba", "pyyaml", "pillow", "tqdm", "scipy", "lazy-loader")
-# numba modules with cache=True the LBP calls use
-KERNEL_MODULES = ("crf/engine/_message_update.py", "crf/engine/_layout.py", "crf/engine/messages.py",
-                  "crf/inference/_plain_kernels.py")
 CHECKOUT = Path(__file__).resolve().parents[3]
 LIBRARY = CHECKOUT / "lib" / "crfmap"  # the library's sources (this runs as a script before anything is installed)
 STUDY = CHECKOUT / "study" / "crfstudy"
@@ -67,19 +67,6 @@ def cache_dir() -> Path | None:
     return Path(value) if value else None
 
 
-def is_cold() -> bool:
-    """Whether a kernel module has no cache index newer than its source (so its first call compiles)."""
-    for relative in KERNEL_MODULES:
-        source = LIBRARY / relative
-        if not source.is_file():
-            continue
-        where = cache_dir() or source.parent / "__pycache__"
-        indexes = list(where.rglob(f"{source.stem}.*.nbi")) if where.is_dir() else []
-        if not indexes or max(p.stat().st_mtime for p in indexes) < source.stat().st_mtime:
-            return True
-    return False
-
-
 def _stamp() -> Path:
     return (cache_dir() or LIBRARY / "crf" / "__pycache__") / "crfmap-warmed.stamp"
 
@@ -95,7 +82,10 @@ def _sources() -> list[Path]:
 
 
 def is_warm() -> bool:
-    """Whether :func:`warm` ran since the last change to the code it compiles (then it has nothing to do)."""
+    """Whether :func:`warm` ran since the last change to the code it compiles (then it has nothing to do).
+
+    Told by the stamp the warm-up writes itself, in the cache folder: numba's cache files are its own business.
+    """
     stamp = _stamp()
     return stamp.is_file() and stamp.stat().st_mtime > max(p.stat().st_mtime for p in _sources())
 
@@ -370,7 +360,7 @@ def warm(verbose: bool = True, jobs: int | None = None) -> float:
 
 def announce_if_cold() -> None:
     """In a Jupyter kernel with a cold cache: say so and compile now (the notebook's first cell)."""
-    if "ipykernel" not in sys.modules or not is_cold():
+    if "ipykernel" not in sys.modules or is_warm():
         return
     print("compiling kernels (first run only; numba caches them on disk) ...", flush=True)
     warm(verbose=True)
@@ -401,7 +391,7 @@ def main(argv=None) -> int:
     if is_warm() and not args.force:
         print(f"numba cache already warm ({cache_dir() or 'beside the sources'})")
         return 0
-    if is_cold():
+    if not is_warm():
         print("compiling kernels (first run only) ...", flush=True)
     warm(verbose=True, jobs=args.jobs)
     return 0

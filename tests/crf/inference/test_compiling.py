@@ -1,31 +1,39 @@
-"""The one-line note before numba compiles LBP kernels (an empty cache), and only then."""
+"""The one-line note as numba starts compiling LBP kernels (an empty cache), and only then; the compile time apart."""
+import io
+
 import numpy as np
 from numba import njit
 
-from crfmap.crf.inference.schedules import Checkerboard
 from crfmap.crf.engine import messages as M
 from crfmap.crf.inference import _plain_kernels as K
-from crfmap.crf.inference.compiling import announce, MESSAGE, needs_compiling
+from crfmap.crf.inference.compiling import announcing, MESSAGE
 from crfmap.crf.inference.lbp import infer
+from crfmap.crf.inference.schedules import Checkerboard
 
 
-def test_note_for_a_kernel_not_yet_compiled_and_not_after(capsys):
+def test_note_when_a_kernel_compiles_and_not_after():
     @njit
     def plus_one(x):  # no disk cache, never called: must compile
         return x + 1
 
-    assert needs_compiling(plus_one)
-    assert announce(plus_one)
-    assert capsys.readouterr().err == MESSAGE + "\n"
-    plus_one(1)
-    assert not announce(plus_one)
-    assert capsys.readouterr().err == ""
+    with announcing(first := io.StringIO()) as note:
+        assert not note.said  # nothing compiled yet
+        plus_one(1)
+        plus_one(2)  # the same block: one note
+    assert note.said and first.getvalue() == MESSAGE + "\n"
+    with announcing(again := io.StringIO()) as note:
+        plus_one(3)  # compiled: no note
+    assert not note.said and again.getvalue() == ""
+    plus_one(1.5)  # outside any block: a compile says nothing
+    with announcing(other := io.StringIO()):
+        plus_one(2.5)  # that signature is compiled now
+    assert other.getvalue() == ""
 
 
 def test_no_note_once_infer_has_run(capsys):
     infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     capsys.readouterr()
-    assert not needs_compiling(K._send_rows) and not needs_compiling(M._beliefs)
+    assert K._send_rows.signatures and M._beliefs.signatures  # the kernels that infer ran are compiled here
     infer(np.full((4, 4), 0.6), max_iter=2, schedule=Checkerboard(kernel="plain"))
     assert capsys.readouterr().err == ""
 

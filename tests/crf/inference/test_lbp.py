@@ -4,7 +4,7 @@ import pytest
 
 from crfmap.errors import InputError
 from crfmap.crf.inference.schedules import Flooding
-from crfmap.crf.inference.exact import exact_marginals
+from crfstudy.references import exact_marginals
 from crfmap.crf.engine.messages import initial_messages
 from crfmap.crf.inference.lbp import infer, message
 from crfmap.crf.inference.regions import disc_region

@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from crfmap.crf.inference.schedules import Checkerboard
-from crfmap.crf.inference.exact import exact_marginals
+from crfstudy.references import exact_marginals
 from crfmap.crf.inference.lbp import infer
 from crfmap.errors import InputError
 

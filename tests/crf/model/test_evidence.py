@@ -4,7 +4,7 @@ import pytest
 
 from crfmap.crf.inference.schedules import Checkerboard
 from crfmap.crf.model.evidence import certain_states, UNCERTAIN
-from crfmap.crf.inference.exact import exact_marginals
+from crfstudy.references import exact_marginals
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.model.potentials import directional_tables
 from crfmap.errors import InputError

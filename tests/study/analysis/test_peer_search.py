@@ -90,13 +90,13 @@ def test_peer_rows_use_the_cached_choices_and_record_the_searches():
             "free_spacing": hilbert.FREE_SPACING} == hil["best"]
     # the tables beside the constants are the caches' scores (rounded as printed)
     octo_scores = {tuple(e[k] for k in OCTOMAP_KEYS): e["brier"] for e in octo["trace"]}
-    assert len(peers.OCTOMAP_SEARCH_INTEL) == len(set(peers.OCTOMAP_SEARCH_INTEL))
-    for *constants, brier in peers.OCTOMAP_SEARCH_INTEL:
+    assert len(ps.OCTOMAP_SEARCH_INTEL) == len(set(ps.OCTOMAP_SEARCH_INTEL))
+    for *constants, brier in ps.OCTOMAP_SEARCH_INTEL:
         assert brier == pytest.approx(octo_scores[tuple(constants)], abs=5e-8)
-    assert peers.OCTOMAP_SEARCH_INTEL[0][:4] == tuple(octo["best"][k] for k in OCTOMAP_KEYS)
-    columns = peers.HILBERT_SEARCH_COLUMNS
-    assert len(peers.HILBERT_SEARCH_INTEL) == len(hil["trace"])
-    for row, entry in zip(peers.HILBERT_SEARCH_INTEL, hil["trace"]):
+    assert ps.OCTOMAP_SEARCH_INTEL[0][:4] == tuple(octo["best"][k] for k in OCTOMAP_KEYS)
+    columns = ps.HILBERT_SEARCH_COLUMNS
+    assert len(ps.HILBERT_SEARCH_INTEL) == len(hil["trace"])
+    for row, entry in zip(ps.HILBERT_SEARCH_INTEL, hil["trace"]):
         got = dict(zip(columns, row))
         assert tuple(got[k] for k in HILBERT_KEYS) == tuple(entry[k] for k in HILBERT_KEYS)
         assert got["brier_all"] == pytest.approx(entry["brier"], abs=5e-5)

@@ -1,18 +1,15 @@
-"""Say so when a call is about to compile numba kernels (an empty cache: tens of seconds of silence otherwise),
+"""Say so when numba starts compiling kernels (an empty cache: tens of seconds of silence otherwise),
 and measure how long compiling took, so it is never reported as the time of the work itself.
 
-A dispatcher needs compiling when it has no compiled signature in this process and numba's
-on-disk cache holds no entry for its current source. Checking costs one small file read per
-dispatcher, once per process. :func:`compile_timer` measures the time spent holding numba's
-compiler lock (compiling, or loading a compiled kernel from the disk cache) within a block.
+Both listen to numba's event API (:mod:`numba.core.event`, in numba's developer manual): "numba:compile"
+fires only while a kernel is compiled, never when it is loaded from the disk cache; "numba:compiler_lock"
+around both. So the note is printed when compiling really starts, and needs no look into numba's cache.
 
->>> from crfmap.crf.inference import _plain_kernels as K
->>> isinstance(needs_compiling(K._send_rows), bool)
-True
->>> with compile_timer() as compiled:
+>>> import io
+>>> with announcing(io.StringIO()) as note, compile_timer() as compiled:
 ...     pass
->>> compiled.seconds
-0.0
+>>> note.said, compiled.seconds
+(False, 0.0)
 """
 from __future__ import annotations
 
@@ -23,58 +20,33 @@ import time
 from numba.core import event
 
 MESSAGE = "compiling LBP kernels (first run only)..."
-_checked = set()  # dispatchers known to be compiled or cached in this process
-_announced = set()  # (fast, schedule, parallel) calls already announced
 
 
-def needs_compiling(dispatcher) -> bool:
-    """Whether calling ``dispatcher`` will compile it (not compiled here, nothing in the disk cache)."""
-    if not hasattr(dispatcher, "signatures"):  # NUMBA_DISABLE_JIT=1: a plain function, which never compiles
-        return False
-    if dispatcher.signatures or id(dispatcher) in _checked:
-        return False
-    try:  # numba's cache index: empty when missing or written for another version of the source
-        cached = bool(dispatcher._cache._cache_file._load_index())
-    except Exception:  # no cache (cache=False, no locator) or another numba layout: assume a compile
-        cached = False
-    if cached:
-        _checked.add(id(dispatcher))
-    return not cached
+class Announcer(event.Listener):
+    """Prints :data:`MESSAGE` (one line) when numba starts the first compile inside an :func:`announcing` block."""
+
+    def __init__(self, stream=None):
+        self.stream = stream
+        self.said = False
+
+    def on_start(self, event):
+        if not self.said:  # a kernel compiles its callees within its own compile: one note for all
+            self.said = True
+            print(MESSAGE, file=self.stream or sys.stderr, flush=True)
+
+    def on_end(self, event):
+        pass
 
 
-def announce(*dispatchers, stream=None) -> bool:
-    """Print :data:`MESSAGE` (one line, stderr) if any of ``dispatchers`` will compile; returns whether it did."""
-    if not any([needs_compiling(d) for d in dispatchers]):
-        return False
-    print(MESSAGE, file=stream or sys.stderr, flush=True)
-    return True
+@contextlib.contextmanager
+def announcing(stream=None):
+    """Print :data:`MESSAGE` (``stream``, default stderr) once if numba compiles a kernel inside the block.
 
-
-def announce_lbp(fast: bool, schedule: str, cells: int = 0, threads: int = 1, fused: bool = False) -> bool:
-    """:func:`announce` for the kernels one :func:`crfmap.crf.inference.lbp.infer` call on ``cells`` cells runs.
-
-    ``fused``: the call packs in one trip and fills no message plane
-    (:meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform`) instead of filling and packing the planes apart.
+    A warm cache (kernels loaded, or compiled already in this process) says nothing; ``.said`` tells.
     """
-    from crfmap.crf.engine import _layout as L
-    from crfmap.crf.engine import _message_update as F
-    from crfmap.crf.engine import messages as M
-    from crfmap.crf.engine import packed as P
-    from crfmap.crf.inference.schedules import plain_kernels
-
-    key = (fast, schedule, cells >= P.SERIAL_CELLS and threads > 1, fused)
-    if key in _announced:  # a kernel the call may skip (e.g. one thread's pass on a large grid) stays
-        return False  # uncompiled: say it once per process, not on every call
-    if fast:  # the kernels every such call runs
-        kernels = ((L._pack_start,) if fused else (L._fill_ones, L._pack_unary)) + (L._beliefs_packed, F._pass)
-        if cells >= P.SPARSE_CELLS:  # only such grids measure changes tile by tile: a smaller one never compiles it
-            kernels += (F._tile_max,)
-    else:
-        kernels = plain_kernels(schedule) + (M._beliefs,)
-    said = announce(*kernels)
-    if said:
-        _announced.add(key)
-    return said
+    announcer = Announcer(stream)
+    with event.install_listener("numba:compile", announcer):
+        yield announcer
 
 
 class CompileTime(event.Listener):

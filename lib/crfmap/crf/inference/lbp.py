@@ -28,13 +28,14 @@ import time
 import warnings
 
 import numpy as np
+import numba
 
-from crfmap.checks import check_number
+from crfmap.checks import check_mask, check_number
 from crfmap.crf.engine import solve as engine
 from crfmap.crf.engine.messages import MESSAGE_FLOOR, check_messages
 from crfmap.crf.engine.packed import PASS_ITERATIONS, fast_tables_ok
 from crfmap.crf.inference import _plain_kernels as K
-from crfmap.crf.inference.compiling import announce_lbp, compile_timer
+from crfmap.crf.inference.compiling import announcing, compile_timer
 from crfmap.crf.inference.multiscale import COARSE_TOL_FACTOR, INITS, coarse_messages
 from crfmap.crf.inference.result import LBPResult, result_grid
 from crfmap.crf.inference.schedules import run_schedule, schedule_settings
@@ -211,24 +212,19 @@ def infer(
         messages = check_messages(messages, shape)
     active = None
     if region is not None:
-        from crfmap.checks import check_mask
-
         active = check_mask("region", region, shape)
     # hard evidence: certain cells are clamped (never updated, sending what their state implies)
     states = None if fused else certain_states(g.probability, link, tables, active)  # fused: found while packing
     sending = states if max_iter else None  # clamped cells send from the first iteration on
     senders = active if sending is None else (sending < 0 if active is None else active & (sending < 0))
 
-    import numba
-
     previous_threads = numba.get_num_threads()
     n_threads = previous_threads if threads is None else min(int(threads), numba.config.NUMBA_NUM_THREADS)
-    announce_lbp(use_fast, settings.name, g.probability.size, n_threads, bool(fused))
     numba.set_num_threads(n_threads)
     try:
         t0 = time.perf_counter()
         timings = {}
-        with compile_timer() as compiled:
+        with announcing(), compile_timer() as compiled:  # a compile says so as it starts
             if use_fast:
                 prob = np.ascontiguousarray(g.probability, dtype=np.float64)
                 out = engine.solve(prob, tables, link, max_iter=max_iter, tol=tol, dtype=dtype, threads=n_threads,

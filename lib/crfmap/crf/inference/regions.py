@@ -6,6 +6,7 @@ import numpy as np
 
 from crfmap.errors import InputError
 from crfmap.grid import as_grid
+from crfmap.checks import check_mask
 
 
 def disc_region(grid, center, radius) -> np.ndarray:
@@ -46,7 +47,6 @@ def near_cells(mask, margin: int) -> np.ndarray:
     """
     if not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool) and margin >= 0):
         raise InputError("margin", f"must be a non-negative whole number of cells, got {margin!r}")
-    from crfmap.checks import check_mask
 
     mask = check_mask("mask", mask)
     # a separable max-filter: dilate rows, then columns, by margin cells

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from crfmap.checks import check_settings
+from crfmap.checks import check_settings, check_number
 from crfmap.crf.engine.messages import beliefs_from_messages, floored, initial_messages
 from crfmap.crf.engine.progress import passed
 from crfmap.crf.inference import _plain_kernels as K
@@ -39,8 +39,6 @@ CORNERS = ("lower-left", "lower-right", "upper-left", "upper-right")
 
 
 def _check_damping(damping):
-    from crfmap.checks import check_number
-
     if check_number("damping", damping, low=0.0, high=1.0) == 1.0:
         raise InputError("damping", f"must be in [0, 1), got {damping!r}")
 
@@ -206,26 +204,15 @@ def _thesis_iteration(settings, r):
     return c
 
 
-# The registry of plain schedules: name -> (one iteration, the plain kernels it runs). SETTINGS, the CLI's choices,
-# the first-run notice (crfmap.crf.inference.compiling) and the study's warm-up are all read from here and SETTINGS:
-# a new schedule is its settings class, one entry here, and its kernels.
+# The registry of plain schedules: name -> one iteration (which runs the schedule's kernels). SETTINGS, the CLI's
+# choices and the study's warm-up are read from here and SETTINGS: a new schedule is its settings class, one entry
+# here, and its kernels.
 PLAIN_RUNNERS = {
-    "checkerboard": (_checkerboard_iteration, ("_send_rows",)),
-    "flooding": (_flooding_iteration, ("_send_rows",)),
-    "sweep": (_sweep_iteration, ("_sweep_along_rows", "_sweep_along_columns")),
-    "thesis": (_thesis_iteration, ("_pull_iteration", "_bfs_order")),
+    "checkerboard": _checkerboard_iteration,
+    "flooding": _flooding_iteration,
+    "sweep": _sweep_iteration,
+    "thesis": _thesis_iteration,
 }
-
-
-def plain_kernels(name: str) -> tuple:
-    """The numba kernels the plain schedule ``name`` runs (for the first-run notice and the warm-up).
-
-    >>> [k.__name__ for k in plain_kernels("sweep")]
-    ['_sweep_along_rows', '_sweep_along_columns']
-    """
-    if name not in PLAIN_RUNNERS:
-        raise InputError("schedule", f"must be one of {', '.join(SCHEDULES)}, got {name!r}")
-    return tuple(getattr(K, kernel) for kernel in PLAIN_RUNNERS[name][1])
 
 
 def run_schedule(settings, probability, tables, link, max_iter, tol, senders, messages, dtype, floor, clamped):
@@ -248,7 +235,7 @@ def run_schedule(settings, probability, tables, link, max_iter, tol, senders, me
         y0, y1 = (int(rows[0]), int(rows[-1]) + 1) if rows.size else (0, 0)
     # the thesis's walk visits the region (clamped cells included); only senders send
     run = _PlainRun(unary, msg, coef, active, use_active, y0, y1, float(floor), float(settings.damping), clamped[1], {})
-    iteration = PLAIN_RUNNERS[settings.name][0]
+    iteration = PLAIN_RUNNERS[settings.name]
     changes = []
     for _ in range(max_iter):
         c = iteration(settings, run)

@@ -30,7 +30,6 @@ from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 
 UNCERTAIN = -1  # state of a cell that is not certain (1 certainly occupied, 0 certainly empty)
-SHOWN = 3  # cells named in a contradiction message at most
 
 # (dy, dx) of the neighbour each message direction reaches: east, west, north (+y), south (-y)
 _STEPS = np.array([[0, 1], [0, -1], [1, 0], [-1, 0]], np.int64)

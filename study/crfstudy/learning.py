@@ -24,16 +24,43 @@ the thesis's defaults). The thesis's learner keeps the default scale by construc
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import inspect
 
 import numpy as np
 
-from crfmap.checks import check_int, check_number, check_pair
+from crfmap.checks import check_int, check_number
 from crfmap.errors import InputError
 from crfmap.crf.inference.lbp import infer
 from crfmap.assess.metrics import mse
 from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
+from crfmap.grid import OccupancyGrid, check_probability_array
 
 ENTRY_NAMES = ("hidden oo", "hidden oe", "hidden eo", "hidden ee", "link oo", "link oe", "link eo", "link ee")
+
+
+def check_pair(observed, truth, grids_only=False) -> tuple:
+    """The probability arrays of an observed grid and its truth, checked to have one shape.
+
+    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of
+    probabilities.
+
+    >>> obs, tru = check_pair(OccupancyGrid(np.full((2, 2), 0.5)), np.zeros((2, 2)))
+    >>> check_pair(obs, np.zeros((3, 2)))
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: truth: shape (3, 2) does not match the observed grid's (2, 2)
+    """
+    arrays = []
+    for name, grid in (("observed", observed), ("truth", truth)):
+        if isinstance(grid, OccupancyGrid):
+            arrays.append(grid.probability)
+        elif grids_only:
+            raise InputError(name, f"expected an OccupancyGrid, got {type(grid).__name__}")
+        else:
+            arrays.append(check_probability_array(grid, name))
+    if arrays[0].shape != arrays[1].shape:
+        raise InputError("truth", f"shape {arrays[1].shape} does not match the observed grid's {arrays[0].shape}")
+    return tuple(arrays)
 
 
 @dataclass
@@ -60,8 +87,6 @@ def check_lbp_options(lbp_options) -> dict:
     ...
     crfmap.errors.InputError: lbp_options: 'grid' is not a keyword option of crfmap.crf.inference.lbp.infer (expected some of dtype, init, max_iter, messages, pairing, region, schedule, threads, tol)
     """
-    import inspect
-
     if lbp_options is None:
         return {}
     if not isinstance(lbp_options, dict):

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from crfmap.errors import InputError
-from crfmap.crf.inference.exact import exact_marginals
+from crfstudy.references import exact_marginals
 
 
 def test_two_cells_by_hand():
