@@ -240,9 +240,9 @@ def _(d):
                 written=["out.npy", "out.npy.yaml"], whole=_whole_npy)
 
 
-# --- api: the learning functions (crfstudy.learning) with arguments of the wrong shape or kind --------
+# --- api: the learning functions (crfmap.assess.learning) with arguments of the wrong shape or kind --------
 def _learning(function, *args, **kw):
-    from crfstudy import learning
+    from crfmap.assess import learning
 
     observed = np.full((6, 6), 0.5)
     truth = np.zeros((6, 6))
@@ -262,7 +262,7 @@ _api("learning-pseudolikelihood-mask-empty",
 _api("learning-fit-mask-a-row", lambda d, m: _learning("learn_pseudolikelihood", mask=np.ones(6, bool)), ["mask"])
 _api("learning-hidden-3x3", lambda d, m: _learning("learn_gradient", np.ones((3, 3))), ["hidden"])
 _api("learning-link-a-pair", lambda d, m: _learning("learn_thesis", _HIDDEN, np.ones(2)), ["link"])
-_api("learning-rescale-3x3", lambda d, m: _imp("crfstudy.learning", "rescale")(np.ones((3, 3)), _LINK),
+_api("learning-rescale-3x3", lambda d, m: _imp("crfmap.assess.learning", "rescale")(np.ones((3, 3)), _LINK),
      ["hidden"])
 _api("learning-lbp-options-a-list", lambda d, m: _learning("learn_thesis", lbp_options=[("max_iter", 2)]),
      ["lbp_options"])

@@ -1,4 +1,5 @@
-"""How good a grid is: metrics, scan-split validation, baselines and peers as rows, navigation and localisation.
+"""How good a grid is, and learning the potentials that make it better: metrics, scan-split validation, baselines
+and peers as rows, navigation and localisation, learning.
 
 Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 
@@ -11,6 +12,7 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 - :mod:`crfmap.assess.comparison`: ``compare``, ``method_names`` (every evaluated row of a scan split)
 - :mod:`crfmap.assess.splits`: ``split_by``, ``harder_splits``, ``block_sensitivity`` (temporal and spatial scan splits)
 - :mod:`crfmap.assess.paired`: ``paired_difference``, ``sign_test`` (methods on the same seeds, rooms or folds)
+- :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
 
@@ -23,6 +25,12 @@ _API = {
     "confusion": "metrics",
     "roc_curve": "metrics",
     "auc": "metrics",
+    "learn_thesis": "learning",
+    "learn_gradient": "learning",
+    "learn_pseudolikelihood": "learning",
+    "LearningResult": "learning",
+    "lbp_mse": "learning",
+    "rescale": "learning",
     "scan_split": "scansplit",
     "ScanSplit": "scansplit",
     "score": "scansplit",

@@ -25,7 +25,7 @@ import numpy as np
 from crfmap.assess.scansplit import score
 from crfmap.crf.presets import coupling_table, get_preset
 from crfmap.crf.inference.lbp import infer
-from crfstudy.learning import learn_pseudolikelihood
+from crfmap.assess.learning import learn_pseudolikelihood
 
 CERTAINTY = "certainty"  # the model whose space is mapped (the gated default is this model plus its evidence gate)
 

@@ -33,7 +33,7 @@ from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.inference.lbp import infer
 from crfmap.crf.inference.result import LBPResult
-from crfstudy.learning import LearningResult, check_pair, learn_gradient, lbp_mse, rescale
+from crfmap.assess.learning import LearningResult, check_pair, learn_gradient, lbp_mse, rescale
 from crfmap.assess.metrics import Report, evaluate, roc_curve
 from crfmap.crf.model.potentials import check_table, DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.recording import Recording
@@ -173,7 +173,7 @@ def search_tables(observed, truth, strengths=SEARCH_STRENGTHS, biases=SEARCH_BIA
 
 def learn_search_gradient(observed, truth, *, strengths=SEARCH_STRENGTHS, biases=SEARCH_BIASES, lbp_options=None,
                           progress=True, **gradient_options) -> LearningResult:
-    """Coarse search (:func:`search_tables`), then :func:`crfstudy.learning.learn_gradient` from its best point.
+    """Coarse search (:func:`search_tables`), then :func:`crfmap.assess.learning.learn_gradient` from its best point.
 
     ``mse_before`` is the MSE of the default tables, ``mse_after`` the learned one; ``trace``
     starts with one row per searched (a, b), then the gradient learner's rows.

@@ -40,7 +40,7 @@ from crfmap.mapping.builder import build_grid
 from crfmap.world.scenes import enclosed_boxes, occluded_walls
 from crfstudy.experiments.pipeline import truth_bounds
 from crfmap.sim.simulator import simulate
-from crfstudy.learning import learn_gradient
+from crfmap.assess.learning import learn_gradient
 
 KINDS = ("occluded", "enclosed", "hollow")
 # The thesis's noise model (sec. 3.1): ranges d +- C, C ~ U[0, bound]; odometry steps +- C as well.

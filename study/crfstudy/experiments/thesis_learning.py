@@ -11,7 +11,7 @@ Both notebooks learn tables on a TRAIN room with three learners under two LBP se
 """
 from __future__ import annotations
 
-from crfstudy.learning import learn_gradient, learn_thesis
+from crfmap.assess.learning import learn_gradient, learn_thesis
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfstudy.experiments.pipeline import THESIS_TWO_ITERATIONS, TO_CONVERGENCE, learn_search_gradient, metric_row
 from crfmap.crf.inference.lbp import infer

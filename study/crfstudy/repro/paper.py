@@ -246,7 +246,7 @@ def attach_caption(table_text: str) -> str:
 # Code names that generated tables carry (notebook labels, parameter names), and the plain words the report
 # prints instead: a reader of the PDF should not need the library's identifiers. Longer names first.
 PLAIN_WORDS = (
-    ("crfstudy.learning.learn_thesis, ", ""),
+    ("crfmap.assess.learning.learn_thesis, ", ""),
     ("LBP crfstudy.references.reference_lbp", "LBP (crfmap's reference implementation)"),
     ("reference_lbp", "reference LBP"),
     ("learn_pseudolikelihood", "pseudo-likelihood learner"),

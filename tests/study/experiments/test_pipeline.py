@@ -7,7 +7,7 @@ from crfmap.world.reachability import reachable
 from crfmap.world.scene import Scene
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfstudy.learning import learn_thesis, lbp_mse
+from crfmap.assess.learning import learn_thesis, lbp_mse
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.sim.laser import Laser
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from crfstudy.learning import LearningResult
+from crfmap.assess.learning import LearningResult
 from crfmap.crf.inference.lbp import infer
 from crfstudy.experiments import thesis_learning as tl
 from crfstudy.experiments.pipeline import TO_CONVERGENCE, metric_row, scan_scene, train_and_test

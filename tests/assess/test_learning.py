@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from crfmap.errors import InputError
-from crfstudy.learning import (
+from crfmap.assess.learning import (
     ENTRY_NAMES,
     lbp_mse,
     learn_gradient,
