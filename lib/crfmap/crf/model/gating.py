@@ -203,10 +203,10 @@ class EvidenceGate:
         return p, x, walls, off_line
 
     def _calibrate(self, p, x, walls, off_line):
-        if self.unobserved_prior != 0.5:
-            q = np.clip(p, LOGIT_FLOOR, 1 - LOGIT_FLOOR)
+        if self.unobserved_prior != 0.5:  # p is the gate's own copy (_cells): changed in place, on those cells only
+            q = np.clip(p[off_line], LOGIT_FLOOR, 1 - LOGIT_FLOOR)
             shift = math.log(self.unobserved_prior / (1 - self.unobserved_prior))
-            p = np.where(off_line, 1 / (1 + np.exp(-(np.log(q) - np.log1p(-q) + shift))), p)
+            p[off_line] = 1 / (1 + np.exp(-(np.log(q) - np.log1p(-q) + shift)))
         return p
 
     def _decide(self, p, x, walls, off_line):
