@@ -34,8 +34,8 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
 
 ``temperature`` T (default 1: no change) scales the output's log-odds, ``P' = sigmoid(logit(P) / T)``
 (:func:`temper`), applied to the whole refined map: T > 1 softens an over-confident map, T < 1 sharpens
-an under-confident one; P = 0.5 (unknown) stays 0.5. :func:`crfmap.assess.calibration.fit_split_temperature`
-fits it on a recording's scan split.
+an under-confident one; P = 0.5 (unknown) stays 0.5. :func:`crfmap.assess.calibration.fit_temperature` fits it
+by the log-loss on the cells a recording's held-out scans observed.
 
 The per-cell strength needs no kernel change: it is a per-cell link table
 ``[[w, 1], [1, w]]`` with ``w = exp(|l|)`` applied to the hard observation
