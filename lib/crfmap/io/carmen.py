@@ -165,33 +165,18 @@ def odometry_jumps(stamps, poses) -> np.ndarray:
 
 
 def read_carmen(path, max_range="auto", no_return=_UNSET, warn=True) -> Recording:
-    """Read a CARMEN log (plain or gzip) into a :class:`~crfmap.recording.Recording`.
+    """Read a CARMEN log (plain or gzip, detected from the content) into a :class:`~crfmap.recording.Recording`.
 
-    Parameters
-    ----------
-    path : str or Path
-        The log (``.log`` or ``.log.gz``; compression is detected from the content).
-    max_range : 'auto', float or None
-        The laser's maximum range [m]: readings at or beyond it (less
-        ``NO_RETURN_TOLERANCE``) are no-returns and become ``+inf``. 'auto': the log's
-        ``PARAM robot_front_laser_max``, else :func:`crfmap.io.no_return.no_return_rule`; None keeps every
-        reading as it is.
-    no_return : float, 'auto' or None
-        Older name of ``max_range`` (used when given).
-    warn : bool
-        Warn (one line each) of dropped ODOM records and of moves their stamps cannot explain;
-        the counts are in ``meta`` either way (callers that use only the scans pass False).
+    ``max_range`` [m]: readings at or beyond it (less ``NO_RETURN_TOLERANCE``) are no-returns and become ``+inf``;
+    ``"auto"``: the log's ``PARAM robot_front_laser_max``, else :func:`crfmap.io.no_return.no_return_rule`; None keeps
+    every reading as it is. ``no_return``: the older name of ``max_range`` (used when given). ``warn``: warn (one line
+    each) of dropped ODOM records and of moves their stamps cannot explain; the counts are in ``meta`` either way
+    (callers that use only the scans pass False).
 
-    Returns
-    -------
-    Recording
-        ``scans`` (laser poses = corrected FLASER poses in ``map``), ``true_poses``
-        (the same poses as base_link in map), ``odometry`` (ODOM lines, with twists),
-        ``meta`` (PARAM values, counts, the maximum range and where it came from, ODOM records
-        dropped and jumps warned of).
+    The recording holds ``scans`` (laser poses = corrected FLASER poses in ``map``), ``true_poses`` (the same poses as
+    base_link in map), ``odometry`` (ODOM lines, with twists) and ``meta`` (PARAM values, counts, the maximum range and
+    where it came from, ODOM records dropped and jumps warned of).
 
-    Examples
-    --------
     >>> rec = read_carmen(data_file("carmen/intel-corrected.log.gz"))  # doctest: +SKIP
     >>> rec.scans.ranges.shape  # doctest: +SKIP
     (910, 180)

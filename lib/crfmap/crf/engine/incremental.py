@@ -50,15 +50,8 @@ def _set_observations(cells, probability, link, floor, un, known, near, margin):
 class IncrementalLBP:
     """A whole grid of ``height x width`` cells on the fast engine, iterated a little at a time.
 
-    Parameters
-    ----------
-    height, width : int
-    hidden, link : 2x2 tables (see :mod:`crfmap.crf.model.potentials`)
-    dtype : np.float32 or np.float64
-    pairing : "receiver" or "oriented"
-    margin : None or int
-        [cells] With a margin, only cells near a cell whose observation was set send; None: all.
-
+    ``hidden``, ``link``: 2x2 tables (:mod:`crfmap.crf.model.potentials`); ``pairing``: ``"receiver"`` or
+    ``"oriented"``. ``margin`` [cells]: only cells near a cell whose observation was set send; None: all.
     Every cell starts unknown (P = 0.5) with uniform messages.
     """
 

@@ -82,18 +82,10 @@ def full_extents(h, w):
 class PackedBlock:
     """Odds messages and observations of a block of ``h x w`` cells in red/black planes.
 
-    Parameters
-    ----------
-    h, w : int
-    dtype : np.float32 or np.float64
-    tables : (4, 2, 2) directional tables (rows receiver)
-    floor : float, the message floor in probability
-    arrays : (msg, un) or None
-        Planes of the right shape and dtype to reuse (their contents are overwritten), e.g.
-        from :mod:`crfmap.crf.engine.workspace`; None allocates new ones.
-    fill : bool
-        Fill the planes with uniform messages and observations; False leaves them undefined
-        for :meth:`start_uniform`, which writes every entry.
+    ``tables``: (4, 2, 2) directional tables (rows receiver); ``floor``: the message floor in probability.
+    ``arrays`` (msg, un): planes of the right shape and dtype to reuse (their contents are overwritten), e.g. from
+    :mod:`crfmap.crf.engine.workspace`; None allocates new ones. ``fill=False`` leaves the planes undefined for
+    :meth:`start_uniform`, which writes every entry (True fills them with uniform messages and observations).
     """
 
     def __init__(self, h, w, dtype, tables, floor, arrays=None, fill=True):
