@@ -1,18 +1,14 @@
 """ROS1 and ROS2 bags <-> :class:`~crfmap.recording.Recording`, with ``rosbags`` (no ROS install).
 
-Writing is :func:`crfmap.io.bag_writer.write_bag`: the topics below, as
-a ROS user expects them from a robot.
+Writing is :func:`crfmap.io.bag_writer.write_bag`: the topics below, as a ROS user expects them from a robot.
 
-Reading (:func:`read_bag`) places every scan in a fixed frame by composing the
-transform chain at the scan's header stamp (REP 105: map -> odom -> base_link -> laser),
-interpolating the moving transforms in time and applying the static mount from
-``/tf_static``. Scans outside the pose track's time span are dropped and counted in
-``recording.meta``. Ranges are kept as recorded (REP 117 filtering is the grid
-builder's job).
+Reading (:func:`read_bag`) places every scan in a fixed frame by composing the transform chain at the scan's header
+stamp (REP 105: map -> odom -> base_link -> laser), interpolating the moving transforms in time and applying the
+static mount from ``/tf_static``. Scans outside the pose track's time span are dropped and counted in
+``recording.meta``. Ranges are kept as recorded (REP 117 filtering is the grid builder's job).
 
-The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``,
-``interpolate_poses``, ``wrap_angle``); building and
-decoding the messages themselves is :mod:`crfmap.io._rosmsgs`.
+The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``, ``interpolate_poses``,
+``wrap_angle``); building and decoding the messages themselves is :mod:`crfmap.io._rosmsgs`.
 """
 from __future__ import annotations
 

@@ -1,11 +1,10 @@
 """Write a :class:`~crfmap.recording.Recording` as a ROS1 or ROS2 bag, with ``rosbags`` (no ROS install).
 
-:func:`write_bag` produces the topics a ROS user expects from a robot: ``/scan``
-(sensor_msgs/LaserScan in the laser frame), ``/odom`` (nav_msgs/Odometry, odom -> base_link
-with twist), ``/cmd_vel`` (geometry_msgs/Twist), ``/tf`` (map -> odom and odom -> base_link),
-``/tf_static`` (base_link -> laser), and, when known, ``/ground_truth_pose``
-(geometry_msgs/PoseStamped, base_link in map) and ``/map`` (nav_msgs/OccupancyGrid of the ground
-truth). Reading them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`` is importable from there too).
+:func:`write_bag` produces the topics a ROS user expects from a robot: ``/scan`` (sensor_msgs/LaserScan in the laser
+frame), ``/odom`` (nav_msgs/Odometry, odom -> base_link with twist), ``/cmd_vel`` (geometry_msgs/Twist), ``/tf``
+(map -> odom and odom -> base_link), ``/tf_static`` (base_link -> laser), and, when known, ``/ground_truth_pose``
+(geometry_msgs/PoseStamped, base_link in map) and ``/map`` (nav_msgs/OccupancyGrid of the ground truth). Reading
+them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`` is importable from there too).
 
 ROS 2 bags are written as ``ros2 bag record`` would: a folder ``NAME`` holding ``metadata.yaml``
 and one data file ``NAME_0.mcap`` (MCAP, the default storage since Jazzy) or ``NAME_0.db3``

@@ -6,16 +6,14 @@ cell to its end point's cell: the cells passed are *empty hits*, the end cell an
 
 - ``model="arctan"`` (the thesis, eq. 16): with x = occupied hits - empty hits over all
   beams, ``P = 0.5 + atan(x) / pi``. Cells never passed stay 0.5 (unknown).
-- ``model="logodds"`` (the baseline of Probabilistic Robotics, ch. 9, Table 9.1): per
-  scan, every cell the scan observes gets ``l += log(p/(1-p))`` once, with ``p = p_hit``
-  if a beam ended in it (occupied takes precedence, as in OctoMap) and ``p = p_miss``
-  otherwise; ``l`` is clamped to ``[-logodds_limit, logodds_limit]`` after each update;
-  ``P = 1 - 1 / (1 + exp(l))``.
+- ``model="logodds"`` (the baseline of Probabilistic Robotics, ch. 9, Table 9.1): per scan, every cell the scan
+  observes gets ``l += log(p/(1-p))`` once, with ``p = p_hit`` if a beam ended in it (occupied takes precedence, as
+  in OctoMap) and ``p = p_miss`` otherwise; ``l`` is clamped to ``[-logodds_limit, logodds_limit]`` after each
+  update; ``P = 1 - 1 / (1 + exp(l))``.
 
-Readings follow REP 117: NaN (invalid) and -Inf (too close) are dropped, finite readings
-outside [range_min, range_max] are dropped, +Inf (and a finite reading equal to range_max,
-the legacy max-range code) means "no return": it clears free space up to
-``free_on_no_return`` metres when asked, and is dropped otherwise.
+Readings follow REP 117: NaN (invalid) and -Inf (too close) are dropped, finite readings outside [range_min,
+range_max] are dropped, +Inf (and a finite reading equal to range_max, the legacy max-range code) means "no return":
+it clears free space up to ``free_on_no_return`` metres when asked, and is dropped otherwise.
 """
 from __future__ import annotations
 
@@ -175,9 +173,8 @@ def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_rang
                progress=False):
     """Occupied and empty hit counts per cell, ``[y, x]`` int32 arrays (thesis sec. 3.2).
 
-    The grid's lower-left corner is ``bounds[:2]`` when bounds are given, else the
-    data's padded bounding box (:func:`scan_bounds`) snapped down to multiples of
-    ``resolution`` (the origin :func:`build_grid` reports).
+    The grid's lower-left corner is ``bounds[:2]`` when bounds are given, else the data's padded bounding box
+    (:func:`scan_bounds`) snapped down to multiples of ``resolution`` (the origin :func:`build_grid` reports).
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))

@@ -1,21 +1,18 @@
 """Online mapping: integrate laser scans one by one, keep the CRF's beliefs fresh around the robot.
 
-Thesis sec. 3.4.4 bounds message passing to a disc around the robot so LBP can run while
-mapping. :class:`OnlineMapper` keeps the hit counts of the arctan grid (thesis eq. 16) and the
-LBP messages between scans. :meth:`OnlineMapper.integrate` adds one scan's hits (the grid
-builder's own ray casting), refreshes the observation of every cell a beam passed, and runs
-checkerboard LBP on the cells within ``radius`` of the laser, warm-started from the messages
-the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to
-convergence, which gives the preset's offline refinement of the same scans
-(``preset.refine(hits=..., passes=...)`` on :func:`crfmap.mapping.builder.count_hits`) when LBP has
-one fixed point.
+Thesis sec. 3.4.4 bounds message passing to a disc around the robot so LBP can run while mapping.
+:class:`OnlineMapper` keeps the hit counts of the arctan grid (thesis eq. 16) and the LBP messages between scans.
+:meth:`OnlineMapper.integrate` adds one scan's hits (the grid builder's own ray casting), refreshes the observation
+of every cell a beam passed, and runs checkerboard LBP on the cells within ``radius`` of the laser, warm-started
+from the messages the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to convergence,
+which gives the preset's offline refinement of the same scans (``preset.refine(hits=..., passes=...)`` on
+:func:`crfmap.mapping.builder.count_hits`) when LBP has one fixed point.
 
 The CRF is a preset (:mod:`crfmap.crf.presets`), as for ``crfmap infer``: by default
-:data:`~crfmap.crf.presets.DEFAULT_PRESET` (certainty-scaled observations, a coupling
-below critical, LBP only near observations), so walls seen many times stay; ``preset="thesis"``
-is the thesis's table [[10, 1], [1, 10]] over the whole grid. Hard evidence never arises here:
-every preset's observation lies strictly inside (0, 1), and no link table (no all-zero row) makes
-such a cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
+:data:`~crfmap.crf.presets.DEFAULT_PRESET` (certainty-scaled observations, a coupling below critical, LBP only near
+observations), so walls seen many times stay; ``preset="thesis"`` is the thesis's table [[10, 1], [1, 10]] over the
+whole grid. Hard evidence never arises here: every preset's observation lies strictly inside (0, 1), and no link
+table (no all-zero row) makes such a cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet

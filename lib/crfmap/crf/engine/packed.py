@@ -312,19 +312,17 @@ class PackedBlock:
             confirm_settled=True):
         """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
 
-        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
-        its last (start at 1 after a warm start, which may stop at once; at ``block`` from
-        uniform messages, which never do: then, with a tol, two passes of ``block / 2`` first). Once two passes
-        measured, a pass is cut to the iterations the last two changes' rate predicts to reach
-        ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up to ``block - 1``
-        iterations past it. With ``freeze`` (a change smaller than ``tol``;
-        None: ``FREEZE * tol``): once fewer than SPARSE_FRACTION of the tiles moved by
-        more than ``freeze`` in a measured iteration, only those tiles and their four
-        neighbours iterate in the next pass; the others ("frozen") keep their messages, which
-        last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one
-        iteration of every cell decides (``confirm_settled`` False: the run ends there, unconfirmed, for a
-        caller that iterates on and confirms itself). ``freeze=0`` freezes only tiles that did not move at
-        all, which changes nothing.
+        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring its last (start at 1
+        after a warm start, which may stop at once; at ``block`` from uniform messages, which never do: then, with a
+        tol, two passes of ``block / 2`` first). Once two passes measured, a pass is cut to the iterations the last
+        two changes' rate predicts to reach ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up
+        to ``block - 1`` iterations past it. With ``freeze`` (a change smaller than ``tol``; None: ``FREEZE *
+        tol``): once fewer than SPARSE_FRACTION of the tiles moved by more than ``freeze`` in a measured iteration,
+        only those tiles and their four neighbours iterate in the next pass; the others ("frozen") keep their
+        messages, which last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one iteration
+        of every cell decides (``confirm_settled`` False: the run ends there, unconfirmed, for a caller that
+        iterates on and confirms itself). ``freeze=0`` freezes only tiles that did not move at all, which changes
+        nothing.
 
         With ``beliefs`` (a float64 [h, w] array) a whole-grid pass that is likely the last (it ends at max_iter,
         the rate predicts tol within it, or it confirms settled tiles) also writes the beliefs after it there,

@@ -1,21 +1,19 @@
 """Loopy belief propagation on an occupancy grid's CRF (thesis sec. 2.6, 3.3, 3.4): :func:`infer`.
 
-The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one
-observed node per cell holding the grid's P(occupied), which sends its hidden node one message
-through ``link``. :func:`infer` checks its input, finds the hard evidence
-(:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on the
-schedule asked for (:mod:`crfmap.crf.inference.schedules`) and returns the beliefs P(occupied)
-as a grid plus the convergence diagnostics (:class:`~crfmap.crf.inference.result.LBPResult`).
+The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one observed node per cell
+holding the grid's P(occupied), which sends its hidden node one message through ``link``. :func:`infer` checks its
+input, finds the hard evidence (:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on
+the schedule asked for (:mod:`crfmap.crf.inference.schedules`) and returns the beliefs P(occupied) as a grid plus
+the convergence diagnostics (:class:`~crfmap.crf.inference.result.LBPResult`).
 
-Kernels: the checkerboard schedule (without damping) runs on the fast engine of
-:mod:`crfmap.crf.engine` (:func:`crfmap.crf.engine.solve.solve`): messages as odds ratios in
-red/black planes, float32 SIMD, several iterations per trip through memory. It gives the plain
-kernel's iterations (to rounding) but measures the largest message change only on the last
-iteration of each pass of up to ``block`` iterations (passes grow 1, 2, 4, ... so a warm start
-still stops at once); the other entries of ``max_change`` are NaN, and a run may do up to
-``block - 1`` iterations more than the plain kernel before it sees ``tol``. On large grids,
-settled tiles pause (``Checkerboard(freeze=...)``). The other schedules, and
-``Checkerboard(kernel="plain")``, run the plain kernels of :mod:`crfmap.crf.inference._plain_kernels`.
+Kernels: the checkerboard schedule (without damping) runs on the fast engine of :mod:`crfmap.crf.engine`
+(:func:`crfmap.crf.engine.solve.solve`): messages as odds ratios in red/black planes, float32 SIMD, several
+iterations per trip through memory. It gives the plain kernel's iterations (to rounding) but measures the largest
+message change only on the last iteration of each pass of up to ``block`` iterations (passes grow 1, 2, 4, ... so a
+warm start still stops at once); the other entries of ``max_change`` are NaN, and a run may do up to ``block - 1``
+iterations more than the plain kernel before it sees ``tol``. On large grids, settled tiles pause
+(``Checkerboard(freeze=...)``). The other schedules, and ``Checkerboard(kernel="plain")``, run the plain kernels of
+:mod:`crfmap.crf.inference._plain_kernels`.
 
 Bounded LBP (sec. 3.4.4): pass ``region`` (a boolean [y, x] mask, e.g. from
 :func:`crfmap.crf.inference.regions.disc_region`): only cells in it send messages; every other
