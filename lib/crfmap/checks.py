@@ -1,9 +1,8 @@
 """Checked inputs: the one place where a user-supplied scalar or a pair of grids is validated.
 
-Every public function that takes a number from a user (a resolution, a noise bound, a seed, a count)
-or an observed grid with its truth checks it here, so the errors read the same everywhere:
-``InputError(name, what is wrong)``. Domain checks (a scene variant, a potential table's layout) stay
-with their domain.
+Every public function that takes a number from a user (a resolution, a noise bound, a seed, a count) or an observed
+grid with its truth checks it here, so the errors read the same everywhere: ``InputError(name, what is wrong)``.
+Domain checks (a scene variant, a potential table's layout) stay with their domain.
 """
 from __future__ import annotations
 

@@ -18,14 +18,13 @@ variable               read by                          accepted
 taking a core from the threads crfmap's other kernels run on (:mod:`crfmap.crf.threads`) and from
 a second notebook or process on the machine (measured: LBP on a 2048² grid 17 % faster, 2 cores).
 
-A folder variable set but empty is refused (an empty path would mean the working directory); an
-empty number variable means unset (the shell idiom ``VAR= command``), as numba reads its own.
-Numba reads ``NUMBA_NUM_THREADS`` once, at its import, and then fails with a traceback (``0``) or
-ignores the value (``abc``): the entry points (the ``crfmap`` command, the study's runners) call
-:func:`prepare` before anything imports numba, and so can a library user (``crfmap.prepare()``), to get
-crfmap's one-line :class:`~crfmap.errors.InputError` naming the variable instead. ``import crfmap`` itself
-changes nothing: no environment variable, no import hook, no file. ``XDG_CACHE_HOME``,
-``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only hints: a bad value falls back to the default.
+A folder variable set but empty is refused (an empty path would mean the working directory); an empty number
+variable means unset (the shell idiom ``VAR= command``), as numba reads its own. Numba reads ``NUMBA_NUM_THREADS``
+once, at its import, and then fails with a traceback (``0``) or ignores the value (``abc``): the entry points (the
+``crfmap`` command, the study's runners) call :func:`prepare` before anything imports numba, and so can a library
+user (``crfmap.prepare()``), to get crfmap's one-line :class:`~crfmap.errors.InputError` naming the variable
+instead. ``import crfmap`` itself changes nothing: no environment variable, no import hook, no file.
+``XDG_CACHE_HOME``, ``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only hints: a bad value falls back to the default.
 """
 from __future__ import annotations
 

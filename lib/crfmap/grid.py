@@ -1,9 +1,8 @@
 """The occupancy grid: P(occupied) per cell plus the metadata of nav_msgs/OccupancyGrid.
 
-Convention (ROS's, REP 103): the array is indexed ``probability[y, x]``; row 0 is the
-lowest y, column 0 the lowest x; cell (0, 0)'s lower-left corner sits at ``origin``
-(x [m], y [m], yaw [rad]) in ``frame_id``; a cell is ``resolution`` metres wide.
-0.5 means unknown (never observed), as in the thesis.
+Convention (ROS's, REP 103): the array is indexed ``probability[y, x]``; row 0 is the lowest y, column 0 the lowest
+x; cell (0, 0)'s lower-left corner sits at ``origin`` (x [m], y [m], yaw [rad]) in ``frame_id``; a cell is
+``resolution`` metres wide. 0.5 means unknown (never observed), as in the thesis.
 """
 from __future__ import annotations
 

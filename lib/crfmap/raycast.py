@@ -98,15 +98,8 @@ def line_cells(x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
 
 
 def first_hit(occupied, start, end):
-    """First occupied cell seen from cell ``start`` towards cell ``end``.
+    """First occupied cell of ``occupied`` ([y, x] bool) seen from cell ``start`` (x, y) towards cell ``end``.
 
-    Parameters
-    ----------
-    occupied : (H, W) bool array, ``[y, x]``
-    start, end : (x, y) integer cells
-
-    Returns
-    -------
     (x, y) of the hit cell, or None if the ray reaches ``end`` (or leaves the grid) unblocked.
 
     >>> occ = np.zeros((1, 5), bool); occ[0, 3] = True

@@ -1,8 +1,7 @@
 """What a robot recorded: laser scans, poses, odometry and commands, independent of file format.
 
-Readers (ROS1/ROS2 bags, CARMEN logs) and the simulator produce these; the grid builder
-and the bag writer consume them. Units are SI (metres, radians, seconds); poses are
-(x, y, yaw) with yaw counter-clockwise from +x (REP 103).
+Readers (ROS1/ROS2 bags, CARMEN logs) and the simulator produce these; the grid builder and the bag writer consume
+them. Units are SI (metres, radians, seconds); poses are (x, y, yaw) with yaw counter-clockwise from +x (REP 103).
 """
 from __future__ import annotations
 
@@ -80,9 +79,8 @@ class ScanSet:
 class Recording:
     """Everything a (real or simulated) run records, as a bag would hold it.
 
-    ``scans.laser_poses`` are the laser poses in ``map`` (true or corrected ones);
-    ``odometry`` is base_link in odom as the wheels report it; ``true_poses`` is
-    base_link in map when known (simulation, corrected logs).
+    ``scans.laser_poses`` are the laser poses in ``map`` (true or corrected ones); ``odometry`` is base_link in odom
+    as the wheels report it; ``true_poses`` is base_link in map when known (simulation, corrected logs).
     """
 
     scans: ScanSet

@@ -10,8 +10,6 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 - :mod:`crfmap.assess.localisation`: ``localise``, ``compare_localisation`` (maps scored by nav2_amcl's likelihood field on held-out scans)
 - :mod:`crfmap.assess.likelihood_field`: ``LaserModel``, ``LikelihoodField`` (nav2_amcl's laser model, as nav2 computes it)
 - :mod:`crfmap.assess.comparison`: ``compare``, ``method_names`` (every evaluated row of a scan split)
-- :mod:`crfmap.assess.splits`: ``split_by``, ``harder_splits``, ``block_sensitivity`` (temporal and spatial scan splits)
-- :mod:`crfmap.assess.paired`: ``paired_difference``, ``sign_test`` (methods on the same seeds, rooms or folds)
 - :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
@@ -48,10 +46,5 @@ _API = {
     "localise": "localisation",
     "compare_localisation": "localisation",
     "LaserModel": "likelihood_field",
-    "split_by": "splits",
-    "harder_splits": "splits",
-    "block_sensitivity": "splits",
-    "paired_difference": "paired",
-    "sign_test": "paired",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)

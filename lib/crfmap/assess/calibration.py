@@ -8,8 +8,6 @@ The expected calibration error is the cell-weighted mean gap, ``sum_b n_b / n |m
 :func:`fit_temperature` fits one temperature T (``P' = sigmoid(logit(P) / T)``; T > 1 softens an
 over-confident map, T < 1 sharpens an under-confident one) by the log-loss on a recording's second
 half: fit it on the training recording only, then apply it unchanged elsewhere.
-:func:`fit_split_temperature` does so for a map of a scan split, and :func:`tempered_preset` gives the
-preset with that T (its ``temperature`` field, applied by the preset's own refinement).
 
 >>> p = np.array([0.1, 0.1, 0.9, 0.9]); y = np.array([0, 1, 1, 1])
 >>> round(expected_calibration_error(p, y, bins=10), 3)
@@ -20,11 +18,10 @@ preset with that T (its ``temperature`` field, applied by the preset's own refin
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
-from crfmap.crf.presets import LOGIT_FLOOR, temper, get_preset
+from crfmap.crf.presets import LOGIT_FLOOR, temper
 from crfmap.errors import InputError
 
 DEFAULT_BINS = 10
@@ -94,32 +91,6 @@ def fit_temperature(p, labels, tol: float = 1e-4) -> float:
             b = lo + g * (hi - lo)
             fb = _logloss(apply_temperature(p, math.exp(b)), y)
     return float(math.exp((lo + hi) / 2))
-
-
-def fit_split_temperature(split, prediction, group: str = "all") -> float:
-    """The temperature of ``prediction`` ([y, x] P on ``split``'s grid) fitted to the second half's labels.
-
-    Fit it on the training recording (Intel) only; the P given is the untempered one (a preset of
-    temperature 1), and the T returned is what :func:`tempered_preset` puts in the preset.
-    """
-    values = np.asarray(getattr(prediction, "probability", prediction), dtype=np.float64)
-    if values.shape != split.shape:
-        raise InputError("prediction", f"shape {values.shape} does not match the split's grid {split.shape}")
-    mask = split.group(group)
-    if not mask.any():
-        raise InputError("split", f"no cell of group {group!r} to fit a temperature on")
-    return fit_temperature(values[mask], split.labels()[mask])
-
-
-def tempered_preset(preset, temperature: float):
-    """``preset`` (a :class:`~crfmap.crf.presets.Preset` or its name) with ``temperature`` T.
-
-    >>> from crfmap.crf.presets import DEFAULT_PRESET
-    >>> tempered_preset(DEFAULT_PRESET, 0.9).temperature
-    0.9
-    """
-    base = get_preset(preset) if isinstance(preset, str) else preset
-    return replace(base, temperature=temperature)
 
 
 def split_calibration(split, predictions: dict, group: str = "all", bins: int = DEFAULT_BINS) -> dict:

@@ -11,11 +11,10 @@ Two learners, each returning the learned tables and its trace:
   a step is relative to the entry's size, which the thesis's fixed alpha = 0.01 is not: 0.1 % of a
   hidden entry of 10 but 100 % of a link entry of 0.01). The gradient is taken by central
   differences through converged LBP (16 LBP runs a step), with a backtracking step size.
-- :func:`learn_pseudolikelihood`: maximise the pseudo-likelihood of the ground truth (Besag), the
-  learner of the Matlab toolbox the thesis compared against. Each cell's conditional given its
-  true neighbours and its observation is exact and cheap, so no inference runs during learning;
-  the objective is smooth, and gradient ascent on the log-entries (so entries stay positive)
-  uses the exact gradient.
+- :func:`learn_pseudolikelihood`: maximise the pseudo-likelihood of the ground truth (Besag), the learner of the
+  Matlab toolbox the thesis compared against. Each cell's conditional given its true neighbours and its observation
+  is exact and cheap, so no inference runs during learning; the objective is smooth, and gradient ascent on the
+  log-entries (so entries stay positive) uses the exact gradient.
 
 Scale: a table matters only up to scale for LBP, so learned tables are reported rescaled: the
 hidden table to a largest entry of 10 and the link table to a largest entry of 1 (the scales of
@@ -41,8 +40,7 @@ ENTRY_NAMES = ("hidden oo", "hidden oe", "hidden eo", "hidden ee", "link oo", "l
 def check_pair(observed, truth, grids_only=False) -> tuple:
     """The probability arrays of an observed grid and its truth, checked to have one shape.
 
-    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of
-    probabilities.
+    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of probabilities.
 
     >>> obs, tru = check_pair(OccupancyGrid(np.full((2, 2), 0.5)), np.zeros((2, 2)))
     >>> check_pair(obs, np.zeros((3, 2)))
@@ -138,21 +136,11 @@ def learn_thesis(
 ) -> LearningResult:
     """The thesis's coordinate search on the 8 table entries, minimising LBP's MSE.
 
-    Parameters
-    ----------
-    observed, truth : grids (OccupancyGrid or [y, x] arrays); truth holds 0/1
-    hidden, link : starting tables (the defaults, as in the thesis)
-    alpha : step (the thesis's 0.01); ``min_alpha`` < alpha lets it halve the step when stuck
-    max_rounds : rounds over the 8 entries at most
-    lbp_options : keyword arguments for :func:`crfmap.crf.inference.lbp.infer` (e.g. the thesis's
-        ``{"schedule": "thesis", "max_iter": 2}``)
+    ``observed``, ``truth``: grids (OccupancyGrid or [y, x] arrays), truth 0/1; ``hidden``, ``link``: the starting
+    tables (the defaults, as in the thesis); ``alpha``: the step (the thesis's 0.01), ``min_alpha`` < alpha lets it
+    halve the step when stuck; ``max_rounds``: rounds over the 8 entries at most; ``lbp_options``: keyword arguments
+    for :func:`crfmap.crf.inference.lbp.infer` (e.g. the thesis's ``{"schedule": "thesis", "max_iter": 2}``).
 
-    Returns
-    -------
-    LearningResult
-
-    Examples
-    --------
     >>> rng = np.random.default_rng(0)
     >>> truth = (rng.uniform(size=(8, 8)) < 0.3).astype(float)
     >>> obs = np.clip(truth + rng.normal(0, 0.3, truth.shape), 0, 1)

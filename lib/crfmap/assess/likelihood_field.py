@@ -10,29 +10,27 @@ The model, as read from ros-navigation/navigation2 (main at commit a3a97043ee93,
   rule writes values >= round(100 * 0.65) black, and nav2_map_server reads black back as 100 (checked
   against :func:`crfmap.io.map_server.save_map` / ``load_map`` in the tests). Free and unknown cells
   play no part in this model. ``convertMap`` keeps the map's origin position and ignores its yaw.
-- ``nav2_amcl/src/map/map_cspace.cpp``, ``map_update_cspace`` (lines 148-210) with ``CachedDistanceMap``
-  and ``enqueue`` (lines 49-141): ``occ_dist`` [m] is meant as each cell's Euclidean distance to the
-  nearest obstacle cell, kept while the distance in cells is <= ``int(max_occ_dist / resolution)``, else
-  ``max_occ_dist``; stored as float. :func:`distance_field` computes exactly that with
-  ``scipy.ndimage.distance_transform_edt`` and the same cut. nav2's own brushfire (a priority queue from the
-  obstacle cells; a cell takes the distance to the obstacle its first-popped neighbour came from) is not
-  always the nearest obstacle: a line-by-line port (``nav2_brushfire`` in the tests) is never below the
-  exact distance but above it in 11-13 % of the cells of the Intel maps (raw, default preset, OctoMap at
-  0.05 m), by up to 0.17 m. Scored with the port's field instead (Intel, the 455 held-out odd scans),
-  every metric moves by at most +0.01 log margin, 4 mm median translation error and 0.7 points of the
-  found share, in the same direction for the three maps, and no ordering between them changes.
+- ``nav2_amcl/src/map/map_cspace.cpp``, ``map_update_cspace`` (lines 148-210) with ``CachedDistanceMap`` and
+  ``enqueue`` (lines 49-141): ``occ_dist`` [m] is meant as each cell's Euclidean distance to the nearest obstacle
+  cell, kept while the distance in cells is <= ``int(max_occ_dist / resolution)``, else ``max_occ_dist``; stored as
+  float. :func:`distance_field` computes exactly that with ``scipy.ndimage.distance_transform_edt`` and the same
+  cut. nav2's own brushfire (a priority queue from the obstacle cells; a cell takes the distance to the obstacle its
+  first-popped neighbour came from) is not always the nearest obstacle: a line-by-line port (``nav2_brushfire`` in
+  the tests) is never below the exact distance but above it in 11-13 % of the cells of the Intel maps (raw, default
+  preset, OctoMap at 0.05 m), by up to 0.17 m. Scored with the port's field instead (Intel, the 455 held-out odd
+  scans), every metric moves by at most +0.01 log margin, 4 mm median translation error and 0.7 points of the found
+  share, in the same direction for the three maps, and no ordering between them changes.
 - ``nav2_amcl/include/nav2_amcl/map/map.hpp`` (lines 121-133) with ``convertMap``: a point (x, y) falls in
   cell ``floor((x - origin_x') / res + 0.5) + size_x / 2`` where ``origin_x' = origin_x + (size_x / 2) * res``
   (integer halves), i.e. AMCL *rounds* to the nearest cell corner index: it reads cell i as centred on
   ``origin_x + i * res``, half a cell below where the OccupancyGrid convention (and crfmap) puts it. This
   module does the same, so a perfect map's best pose sits about (res/2, res/2) from the true one (for
   0.05 m cells, 3.5 cm). Pass ``origin`` shifted by ``+res/2`` in x and y to measure without that shift.
-- ``nav2_amcl/src/sensors/laser/likelihood_field_model.cpp``, ``sensorFunction`` (lines 49-140): beams
-  ``0, step, 2 step, ...`` with ``step = max(1, (range_count - 1) // (max_beams - 1))`` (lines 68-73);
-  a beam is skipped if its range is ``>= range_max`` (max-range readings, line 92) or NaN (line 97);
-  its end point at the laser pose plus range along ``yaw + bearing`` (lines 104-105); ``z`` = that
-  cell's ``occ_dist``, or ``max_occ_dist`` off the map (lines 114-118);
-  ``pz = z_hit exp(-z^2 / (2 sigma_hit^2)) + z_rand / range_max`` (lines 121-123, no Gaussian
+- ``nav2_amcl/src/sensors/laser/likelihood_field_model.cpp``, ``sensorFunction`` (lines 49-140): beams ``0, step, 2
+  step, ...`` with ``step = max(1, (range_count - 1) // (max_beams - 1))`` (lines 68-73); a beam is skipped if its
+  range is ``>= range_max`` (max-range readings, line 92) or NaN (line 97); its end point at the laser pose plus
+  range along ``yaw + bearing`` (lines 104-105); ``z`` = that cell's ``occ_dist``, or ``max_occ_dist`` off the map
+  (lines 114-118); ``pz = z_hit exp(-z^2 / (2 sigma_hit^2)) + z_rand / range_max`` (lines 121-123, no Gaussian
   normalisation), and the scan's weight is ``p = 1 + sum pz^3`` (line 132; not a product of pz).
   :func:`LikelihoodField.log_weights` returns ``log p``.
 - ``nav2_amcl/src/amcl_node.cpp``, ``updateFilter`` (lines 717-743): ``range_max = min(scan range_max,

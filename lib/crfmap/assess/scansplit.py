@@ -1,28 +1,25 @@
 """Scan-split validation: does a refined map predict what the robot observes next? (no hand labels)
 
-A real recording has no ground truth, but it has many scans of the same place. Split its
-scans in two interleaved halves (even and odd scans by default): the grid is built from the
-*first* half only, refined, and each cell's P(occupied) is scored against what the *second*
-half observes there. Each second-half beam that returns marks its end cell occupied once; every
-cell it passes is marked free once. A cell the second half observed is labelled occupied when
-its beams ended there at least as often as they passed it (``hits2 >= passes2``), else free;
-every such cell counts once.
+A real recording has no ground truth, but it has many scans of the same place. Split its scans in two interleaved
+halves (even and odd scans by default): the grid is built from the *first* half only, refined, and each cell's
+P(occupied) is scored against what the *second* half observes there. Each second-half beam that returns marks its
+end cell occupied once; every cell it passes is marked free once. A cell the second half observed is labelled
+occupied when its beams ended there at least as often as they passed it (``hits2 >= passes2``), else free; every
+such cell counts once.
 
 Scores (:func:`score`) are reported for three groups of second-half cells:
 
 - ``"all"``: every cell the second half observed;
 - ``"seen"``: those the first half also observed (the map had evidence there);
-- ``"unseen"``: those the first half never observed (the raw grid says 0.5 there; only
-  filling-in can help).
+- ``"unseen"``: those the first half never observed (the raw grid says 0.5 there; only filling-in can help).
 
-Metrics: the Brier score (mean squared error of P against the 0/1 label), log-loss (P clipped
-to [1e-6, 1 - 1e-6]), AUC (ties count one half) and the recall of observed walls (the share of
-occupied-labelled cells with P > 0.5). Confidence intervals come from a *spatial-block
-bootstrap*: the grid is cut into ``block`` x ``block`` cell squares, and squares (not cells,
-which are correlated with their neighbours) are resampled with replacement. Predictions scored
-together share the resamples, so :func:`score` also gives intervals of the paired difference to
-a reference prediction; :func:`block_resamples` hands the same draws to other scorers
-(:mod:`crfmap.assess.navigation`: the map as nav2 reads it, which :func:`compare` adds under ``"_nav"``).
+Metrics: the Brier score (mean squared error of P against the 0/1 label), log-loss (P clipped to [1e-6, 1 - 1e-6]),
+AUC (ties count one half) and the recall of observed walls (the share of occupied-labelled cells with P > 0.5).
+Confidence intervals come from a *spatial-block bootstrap*: the grid is cut into ``block`` x ``block`` cell squares,
+and squares (not cells, which are correlated with their neighbours) are resampled with replacement. Predictions
+scored together share the resamples, so :func:`score` also gives intervals of the paired difference to a reference
+prediction; :func:`block_resamples` hands the same draws to other scorers (:mod:`crfmap.assess.navigation`: the map
+as nav2 reads it, which :func:`compare` adds under ``"_nav"``).
 
 >>> split = ScanSplit(first_hits=np.array([[0, 3, 0]]), first_passes=np.array([[2, 0, 0]]),
 ...                   second_hits=np.array([[0, 2, 1]]), second_passes=np.array([[3, 0, 0]]))
@@ -128,9 +125,8 @@ class ScanSplit:
 def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress: bool = False) -> ScanSplit:
     """Count the hits of the ``parity`` half (even scans: 0) and of the other half on one grid.
 
-    The grid covers every scan of the recording (:func:`crfmap.mapping.builder.scan_bounds`,
-    snapped to multiples of ``resolution`` like :func:`crfmap.mapping.build_grid`), unless
-    ``bounds`` (xmin, ymin, xmax, ymax) [m] is given.
+    The grid covers every scan of the recording (:func:`crfmap.mapping.builder.scan_bounds`, snapped to multiples of
+    ``resolution`` like :func:`crfmap.mapping.build_grid`), unless ``bounds`` (xmin, ymin, xmax, ymax) [m] is given.
 
     >>> from crfmap.recording import ScanSet
     >>> r = np.array([[0.36], [0.26]], np.float32)
@@ -161,9 +157,8 @@ def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress:
 class _Scorer:
     """The metrics of one prediction on one group of cells, fast under block resampling.
 
-    Brier, log-loss and recall are sums, kept per bootstrap block (all resamples at once are one
-    matrix product); the AUC sorts once (only when asked for) and reweights the sorted cells per
-    resample in a compiled loop.
+    Brier, log-loss and recall are sums, kept per bootstrap block (all resamples at once are one matrix product);
+    the AUC sorts once (only when asked for) and reweights the sorted cells per resample in a compiled loop.
     """
 
     def __init__(self, p, y, inverse, n_blocks, auc=True, logloss=True, counts=None):
@@ -271,11 +266,10 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
           reference: str | None = None, level: float = 0.95, groups=GROUPS, metrics=METRICS) -> dict:
     """Score predictions ``{name: [y, x] P(occupied)}`` against the second half, with intervals.
 
-    Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), ...}}}``; with a
-    ``reference`` name, also ``metric + "_diff"`` (name minus reference) and its interval
-    ``metric + "_diff_ci"`` from the same (paired) resamples. ``n_boot=0`` skips the intervals;
-    ``groups`` and ``metrics`` limit the work to what is asked for (without ``"auc"`` nothing is
-    sorted).
+    Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), ...}}}``; with a ``reference`` name, also
+    ``metric + "_diff"`` (name minus reference) and its interval ``metric + "_diff_ci"`` from the same (paired)
+    resamples. ``n_boot=0`` skips the intervals; ``groups`` and ``metrics`` limit the work to what is asked for
+    (without ``"auc"`` nothing is sorted).
 
     >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))
     >>> s = score(sp, {"raw": sp.raw_probability()}, n_boot=0, groups=("all",), metrics=("brier",))

@@ -48,10 +48,9 @@ ORDER_PERIOD = 0.1  # [s] between scans stamped by their order (10 Hz, a common 
 def stamps_from_order(rec, source):
     """``rec`` with its scans stamped by their order if their stamps cannot place them (one warning), else ``rec``.
 
-    A log whose FLASER stamps are all 0, or repeat at different poses, cannot be a bag: tf holds
-    one pose per time (:func:`crfmap.io.bag_writer.clashing_scans`). Scan i is then stamped
-    ``START_TIME + i * ORDER_PERIOD``, the true poses with it; odometry and cmd_vel, whose own
-    stamps cannot be related to those, are dropped.
+    A log whose FLASER stamps are all 0, or repeat at different poses, cannot be a bag: tf holds one pose per time
+    (:func:`crfmap.io.bag_writer.clashing_scans`). Scan i is then stamped ``START_TIME + i * ORDER_PERIOD``, the
+    true poses with it; odometry and cmd_vel, whose own stamps cannot be related to those, are dropped.
     """
     from crfmap.io.bag_writer import clashing_scans
     from crfmap.sim.simulator import START_TIME

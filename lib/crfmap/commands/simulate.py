@@ -1,9 +1,8 @@
 """``crfmap simulate SCENE OUT_BAG``: drive a simulated robot through a scene and record a ROS bag.
 
-The bag holds the laser scans, odometry, true poses, Twist commands and the ground-truth
-map (see :mod:`crfmap.io.bag_reader`). OUT_BAG must not exist yet unless ``--overwrite`` is
-given; the bag is written to a temporary name and renamed when complete, so an
-interrupted run leaves nothing behind.
+The bag holds the laser scans, odometry, true poses, Twist commands and the ground-truth map (see
+:mod:`crfmap.io.bag_reader`). OUT_BAG must not exist yet unless ``--overwrite`` is given; the bag is written to a
+temporary name and renamed when complete, so an interrupted run leaves nothing behind.
 
 Example::
 

@@ -17,9 +17,8 @@
 - :mod:`crfmap.crf.threads`: row bands of ``nogil`` kernels on Python threads (cheaper to compile
   than numba's parallel loops), used by all three layers.
 
-From :func:`infer` to the kernel that updates a message: ``infer -> engine.solve.solve ->
-PackedBlock.run -> _pass`` (fast), ``infer -> run_schedule -> kernel``
-(plain).
+From :func:`infer` to the kernel that updates a message: ``infer -> engine.solve.solve -> PackedBlock.run -> _pass``
+(fast), ``infer -> run_schedule -> kernel`` (plain).
 
 Public API (imported on first use, so ``import crfmap.crf`` stays cheap):
 """

@@ -3,11 +3,10 @@
 :data:`DEFAULT_PRESET` is what ``crfmap infer`` and ``crfmap evaluate`` run unless told
 otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask for.
 
-- ``"thesis"``: the thesis's defaults, hidden [[10, 1], [1, 10]] and the identity link,
-  over the whole grid. Its coupling J = ln(10) / 2 = 1.15 is far above the square lattice's
-  critical coupling ln(1 + sqrt 2) / 2 = 0.44: the CRF is in its ordered phase, so LBP
-  erases thin walls and gives never-seen space the state of its border. Use it to reproduce
-  the thesis.
+- ``"thesis"``: the thesis's defaults, hidden [[10, 1], [1, 10]] and the identity link, over the whole grid. Its
+  coupling J = ln(10) / 2 = 1.15 is far above the square lattice's critical coupling ln(1 + sqrt 2) / 2 = 0.44: the
+  CRF is in its ordered phase, so LBP erases thin walls and gives never-seen space the state of its border. Use it
+  to reproduce the thesis.
 - ``"certainty"``: each cell's link strength follows its
   evidence. A cell's signed evidence is ``x = hits - passes`` (the quantity the thesis's
   arctan model turns into P). Its observation says P(occupied) = ``sigmoid(l)`` with
@@ -34,18 +33,16 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
 
 ``temperature`` T (default 1: no change) scales the output's log-odds, ``P' = sigmoid(logit(P) / T)``
 (:func:`temper`), applied to the whole refined map: T > 1 softens an over-confident map, T < 1 sharpens
-an under-confident one; P = 0.5 (unknown) stays 0.5. :func:`crfmap.assess.calibration.fit_split_temperature`
-fits it on a recording's scan split.
+an under-confident one; P = 0.5 (unknown) stays 0.5. :func:`crfmap.assess.calibration.fit_temperature` fits it
+by the log-loss on the cells a recording's held-out scans observed.
 
-The per-cell strength needs no kernel change: it is a per-cell link table
-``[[w, 1], [1, w]]`` with ``w = exp(|l|)`` applied to the hard observation
-``o = (x > 0)``, and such a table turns that observation into exactly the probability
-``sigmoid(l)`` (:func:`crfmap.crf.model.potentials.link_unary`), which LBP takes with the identity link.
+The per-cell strength needs no kernel change: it is a per-cell link table ``[[w, 1], [1, w]]`` with ``w = exp(|l|)``
+applied to the hard observation ``o = (x > 0)``, and such a table turns that observation into exactly the
+probability ``sigmoid(l)`` (:func:`crfmap.crf.model.potentials.link_unary`), which LBP takes with the identity link.
 
-A map file holds P, not counts. The preset then reads the thesis's model backwards,
-``x = tan(pi (P - 0.5))``: exact for grids crfmap builds (P = 0.5 + atan(x) / pi), and
-P = 0 or 1 (a trinary map's free and occupied) gives x = -inf or +inf, i.e. the strongest
-observation ``sigmoid(-limit)`` or ``sigmoid(limit)``; unknown (0.5) gives no link.
+A map file holds P, not counts. The preset then reads the thesis's model backwards, ``x = tan(pi (P - 0.5))``: exact
+for grids crfmap builds (P = 0.5 + atan(x) / pi), and P = 0 or 1 (a trinary map's free and occupied) gives x = -inf
+or +inf, i.e. the strongest observation ``sigmoid(-limit)`` or ``sigmoid(limit)``; unknown (0.5) gives no link.
 
 >>> p = get_preset("certainty")
 >>> u = p.observation(hits=np.array([[20, 1, 0]]), passes=np.array([[0, 0, 0]]))

@@ -1,12 +1,11 @@
 """Running ``nogil`` numba kernels on several threads: row bands over Python threads instead of numba's parfor.
 
-A kernel compiled with ``parallel=True`` costs two to three times the compile time of the same
-loop compiled serially (numba's parfor passes and its gufunc wrapper), and that compile is the
-wait of a first ``crfmap infer`` and of the warm-up. So crfmap's kernels are serial
-``@njit(nogil=True)`` functions over a range of rows (or a list of independent jobs), and
-the threads come from here: a persistent pool per thread count, the calling thread doing
-one share itself. The thread count is the caller's, or numba's (``numba.get_num_threads``,
-which :func:`crfmap.crf.inference.lbp.infer` sets for the duration of a call).
+A kernel compiled with ``parallel=True`` costs two to three times the compile time of the same loop compiled
+serially (numba's parfor passes and its gufunc wrapper), and that compile is the wait of a first ``crfmap infer``
+and of the warm-up. So crfmap's kernels are serial ``@njit(nogil=True)`` functions over a range of rows (or a list
+of independent jobs), and the threads come from here: a persistent pool per thread count, the calling thread doing
+one share itself. The thread count is the caller's, or numba's (``numba.get_num_threads``, which
+:func:`crfmap.crf.inference.lbp.infer` sets for the duration of a call).
 
 >>> import numpy as np
 >>> from numba import njit

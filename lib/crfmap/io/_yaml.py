@@ -91,17 +91,7 @@ def read_yaml(path, what, limit=MAX_TEXT_BYTES):
 def read_mapping(path, what):
     """The YAML mapping in file ``path`` (``what`` it should hold goes into the errors)."""
     path = check_input_file(path, what)
-    try:
-        doc = load_text(read_text_file(path, what), path)
-    except UnicodeDecodeError:
-        raise InputError(path, "not a text file (expected YAML)") from None
-    except OSError as exc:
-        raise InputError(path, f"cannot read: {exc.strerror or exc}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).replace("\n", " ")
-        raise InputError(path, f"not valid YAML{where}: {problem}") from None
+    doc = read_yaml(path, what)  # read_text_file and load_text already turn every failure into an InputError
     if not isinstance(doc, dict):
         raise InputError(path, f"expected a YAML mapping of keys ({what}), got {type(doc).__name__}")
     return doc

@@ -1,11 +1,10 @@
 """Write files so that nothing is ever half-written: a temporary file, then a rename.
 
-While a temporary file exists, SIGTERM and SIGHUP (like SIGINT, Ctrl-C) raise
-:class:`Interrupted` in the main thread, so the ``except`` clauses below remove the
-temporary before the process ends (the default action of those signals would kill it
-on the spot and leave ``.name.xxxx.tmp`` behind). :func:`atomic_paths` replaces several
-files as one unit (an ``.npy`` array and its sidecar): a reader that takes
-:func:`unit_lock` never sees the array of one write and the sidecar of another.
+While a temporary file exists, SIGTERM and SIGHUP (like SIGINT, Ctrl-C) raise :class:`Interrupted` in the main
+thread, so the ``except`` clauses below remove the temporary before the process ends (the default action of those
+signals would kill it on the spot and leave ``.name.xxxx.tmp`` behind). :func:`atomic_paths` replaces several files
+as one unit (an ``.npy`` array and its sidecar): a reader that takes :func:`unit_lock` never sees the array of one
+write and the sidecar of another.
 """
 from __future__ import annotations
 
@@ -190,8 +189,7 @@ def atomic_paths(*paths):
 def atomic_path(path):
     """Yield a temporary path beside ``path``; on success rename it onto ``path``.
 
-    On an exception (or SIGTERM/SIGHUP/SIGINT) the temporary file is removed and ``path``
-    is left untouched.
+    On an exception (or SIGTERM/SIGHUP/SIGINT) the temporary file is removed and ``path`` is left untouched.
 
     >>> with atomic_path("out.txt") as tmp:  # doctest: +SKIP
     ...     Path(tmp).write_text("done")

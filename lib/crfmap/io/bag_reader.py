@@ -1,18 +1,14 @@
 """ROS1 and ROS2 bags <-> :class:`~crfmap.recording.Recording`, with ``rosbags`` (no ROS install).
 
-Writing is :func:`crfmap.io.bag_writer.write_bag`: the topics below, as
-a ROS user expects them from a robot.
+Writing is :func:`crfmap.io.bag_writer.write_bag`: the topics below, as a ROS user expects them from a robot.
 
-Reading (:func:`read_bag`) places every scan in a fixed frame by composing the
-transform chain at the scan's header stamp (REP 105: map -> odom -> base_link -> laser),
-interpolating the moving transforms in time and applying the static mount from
-``/tf_static``. Scans outside the pose track's time span are dropped and counted in
-``recording.meta``. Ranges are kept as recorded (REP 117 filtering is the grid
-builder's job).
+Reading (:func:`read_bag`) places every scan in a fixed frame by composing the transform chain at the scan's header
+stamp (REP 105: map -> odom -> base_link -> laser), interpolating the moving transforms in time and applying the
+static mount from ``/tf_static``. Scans outside the pose track's time span are dropped and counted in
+``recording.meta``. Ranges are kept as recorded (REP 117 filtering is the grid builder's job).
 
-The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``,
-``interpolate_poses``, ``wrap_angle``); building and
-decoding the messages themselves is :mod:`crfmap.io._rosmsgs`.
+The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``, ``interpolate_poses``,
+``wrap_angle``); building and decoding the messages themselves is :mod:`crfmap.io._rosmsgs`.
 """
 from __future__ import annotations
 
@@ -262,29 +258,16 @@ def _mount_on(c, path, laser_frame, base_frame, laser_mount):
 
 
 def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Recording:
-    """Read a ROS1 ``.bag`` or a ROS2 bag folder into a :class:`~crfmap.recording.Recording`.
+    """Read a ROS1 ``.bag`` or a ROS2 bag folder (or its ``.db3``/``.mcap``/``metadata.yaml``) into a Recording.
 
-    Parameters
-    ----------
-    path : str or Path
-        A ROS1 ``.bag`` file, a ROS2 bag folder, or its ``.db3``/``.mcap``/``metadata.yaml``.
-    scan_topic : str, optional
-        The LaserScan topic; by default the only one (or ``/scan``).
-    pose_source : {'auto', 'tf', 'odom', 'truth'}
-        Where the laser poses come from: the ``/tf`` tree (map -> odom -> base_link, or
-        odom -> base_link), ``/odom`` messages, or ``/ground_truth_pose``. 'auto' takes
-        the first available in that order.
-    laser_mount : (x, y, yaw), optional
-        The laser's pose on the robot, overriding ``/tf_static``.
+    ``scan_topic``: the LaserScan topic; by default the only one (or ``/scan``). ``pose_source``: where the laser poses
+    come from: ``"tf"`` the ``/tf`` tree (map -> odom -> base_link, or odom -> base_link), ``"odom"`` the ``/odom``
+    messages, ``"truth"`` ``/ground_truth_pose``; ``"auto"`` takes the first available in that order.
+    ``laser_mount`` (x, y, yaw): the laser's pose on the robot, overriding ``/tf_static``.
 
-    Returns
-    -------
-    Recording
-        ``scans.laser_poses`` in the fixed frame (``scans.frame_id``: map or odom);
-        ``meta`` says which pose source was used and how many scans were dropped.
+    The :class:`~crfmap.recording.Recording`'s ``scans.laser_poses`` are in the fixed frame (``scans.frame_id``: map or
+    odom); its ``meta`` says which pose source was used and how many scans were dropped.
 
-    Examples
-    --------
     >>> rec = read_bag(data_file("rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2"))  # doctest: +SKIP
     >>> rec.laser_mount  # doctest: +SKIP
     (0.00393584, 0.0, 1.5707963267948966)

@@ -1,11 +1,10 @@
 """Write a :class:`~crfmap.recording.Recording` as a ROS1 or ROS2 bag, with ``rosbags`` (no ROS install).
 
-:func:`write_bag` produces the topics a ROS user expects from a robot: ``/scan``
-(sensor_msgs/LaserScan in the laser frame), ``/odom`` (nav_msgs/Odometry, odom -> base_link
-with twist), ``/cmd_vel`` (geometry_msgs/Twist), ``/tf`` (map -> odom and odom -> base_link),
-``/tf_static`` (base_link -> laser), and, when known, ``/ground_truth_pose``
-(geometry_msgs/PoseStamped, base_link in map) and ``/map`` (nav_msgs/OccupancyGrid of the ground
-truth). Reading them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`` is importable from there too).
+:func:`write_bag` produces the topics a ROS user expects from a robot: ``/scan`` (sensor_msgs/LaserScan in the laser
+frame), ``/odom`` (nav_msgs/Odometry, odom -> base_link with twist), ``/cmd_vel`` (geometry_msgs/Twist), ``/tf``
+(map -> odom and odom -> base_link), ``/tf_static`` (base_link -> laser), and, when known, ``/ground_truth_pose``
+(geometry_msgs/PoseStamped, base_link in map) and ``/map`` (nav_msgs/OccupancyGrid of the ground truth). Reading
+them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`` is importable from there too).
 
 ROS 2 bags are written as ``ros2 bag record`` would: a folder ``NAME`` holding ``metadata.yaml``
 and one data file ``NAME_0.mcap`` (MCAP, the default storage since Jazzy) or ``NAME_0.db3``
@@ -81,29 +80,16 @@ def offered_qos(topic):
 def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble", progress=False):
     """Write a :class:`~crfmap.recording.Recording` as a ROS2 bag folder or a ROS1 ``.bag`` file.
 
-    Parameters
-    ----------
-    recording : Recording
-    path : str or Path
-        ROS2: a folder (created; replaced if present). ROS1: a file ending in ``.bag``.
-    fmt : {'ros2', 'ros1'}
-    storage : {'mcap', 'sqlite3'}
-        ROS2 storage plugin (data file ``NAME_0.mcap`` or ``NAME_0.db3``).
-    distro : {'humble', 'jazzy'}
-        The rosbag2 whose files to write: Humble's (default; metadata version 5, sqlite3 schema 3;
-        every later rosbag2 reads them) or Jazzy's (version 9, schema 4; Humble cannot read them).
-    progress : bool
-        Show a tqdm bar of the messages written (seconds for a log of a few thousand scans).
+    ``path``: ROS2 (``fmt="ros2"``): a folder (created; replaced if present); ROS1: a file ending in ``.bag``.
+    ``storage``: the ROS2 storage plugin, ``"mcap"`` or ``"sqlite3"`` (data file ``NAME_0.mcap`` or ``NAME_0.db3``).
+    ``distro``: the rosbag2 whose files to write: ``"humble"``'s (default; metadata version 5, sqlite3 schema 3; every
+    later rosbag2 reads them) or ``"jazzy"``'s (version 9, schema 4; Humble cannot read them). ``progress``: a tqdm bar
+    of the messages written (seconds for a log of a few thousand scans).
 
-    Notes
-    -----
-    ``/tf`` holds odom -> base_link at every odometry stamp (and at every scan stamp,
-    interpolated) and map -> odom at every scan stamp, chosen so that
-    map -> odom -> base_link -> laser is exactly the recorded laser pose of each scan.
+    ``/tf`` holds odom -> base_link at every odometry stamp (and at every scan stamp, interpolated) and map -> odom at
+    every scan stamp, chosen so that map -> odom -> base_link -> laser is exactly the recorded laser pose of each scan.
     Without odometry, map -> odom is the identity and odom -> base_link the true pose.
 
-    Examples
-    --------
     >>> write_bag(recording, "/tmp/run_bag", fmt="ros2")  # doctest: +SKIP
     >>> read_bag("/tmp/run_bag").scans.ranges.shape  # doctest: +SKIP
     (120, 360)

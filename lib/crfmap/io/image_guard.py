@@ -1,11 +1,10 @@
 """Checks on a map image made from its header, before any pixel is decoded.
 
-A 20000 x 20000 PNG of a few kilobytes would otherwise take 8 GB and most of a minute to
-decode before anything could object. :func:`check_map_image` reads only the header:
-the image must be a regular file (a FIFO would block the reader) no larger than
-:func:`crfmap.checks.max_cells` pixels (raise it with ``crfmap --max-cells N`` or
-``$CRFMAP_MAX_CELLS``; above 178 million pixels Pillow's own bomb limit still applies).
-A float image (TIFF mode ``F``) must hold finite values: NaN has no occupancy.
+A 20000 x 20000 PNG of a few kilobytes would otherwise take 8 GB and most of a minute to decode before anything
+could object. :func:`check_map_image` reads only the header: the image must be a regular file (a FIFO would block
+the reader) no larger than :func:`crfmap.checks.max_cells` pixels (raise it with ``crfmap --max-cells N`` or
+``$CRFMAP_MAX_CELLS``; above 178 million pixels Pillow's own bomb limit still applies). A float image (TIFF mode
+``F``) must hold finite values: NaN has no occupancy.
 """
 from __future__ import annotations
 

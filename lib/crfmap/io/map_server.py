@@ -155,14 +155,13 @@ def _optional_thresh(name, value):
 def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAULT_LOADER) -> OccupancyGrid:
     """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
 
-    ``loader``: ``"jazzy"`` (default: Jazzy, Kilted, Rolling) or ``"humble"``; their per-pixel
-    rules differ (luma vs channel mean, ``>=`` vs ``>``, alpha handling, float32): see
-    :mod:`crfmap.io.nav2_loader`. Roughly: ``occ = 1 - brightness`` (``brightness`` if
-    ``negate``); trinary: occupied above ``occupied_thresh`` -> 100, below ``free_thresh``
-    -> 0, else -1; scale puts ``round((occ - free) / (occupied - free) * 100)`` in between;
-    raw takes the grey level as the value. The top image row is the highest y (row flip);
-    cell (0, 0) sits at ``origin``. A value of 50 loads as P just above 0.5, so that it
-    stays a known 50 (crfmap's P = 0.5 means unknown).
+    ``loader``: ``"jazzy"`` (default: Jazzy, Kilted, Rolling) or ``"humble"``; their per-pixel rules differ (luma vs
+    channel mean, ``>=`` vs ``>``, alpha handling, float32): see :mod:`crfmap.io.nav2_loader`. Roughly: ``occ = 1 -
+    brightness`` (``brightness`` if ``negate``); trinary: occupied above ``occupied_thresh`` -> 100, below
+    ``free_thresh`` -> 0, else -1; scale puts ``round((occ - free) / (occupied - free) * 100)`` in between; raw
+    takes the grey level as the value. The top image row is the highest y (row flip); cell (0, 0) sits at
+    ``origin``. A value of 50 loads as P just above 0.5, so that it stays a known 50 (crfmap's P = 0.5 means
+    unknown).
 
     ``occupied_thresh`` / ``free_thresh`` override the file's thresholds (loading only;
     ``grid.meta`` keeps the file's values). Example: maps written by nav2 carry
@@ -242,10 +241,9 @@ def map_yaml_text(image_name, mode, resolution, origin, occupied_thresh, free_th
 def pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
     """nav2's ``tryWriteMapToFile`` per-cell rule: (grey uint8, alpha uint8 or None), top row first.
 
-    Trinary: ``v <= rint(100 free)`` -> 254, ``v >= rint(100 occupied)`` -> 0, else and
-    unknown -> 205. Scale: grey ``(100 - v) / 100``, unknown -> grey 0.5 and transparent
-    (GraphicsMagick may round a tie to the other grey level; the value read back is the
-    same). Raw: grey ``v``, unknown -> 255.
+    Trinary: ``v <= rint(100 free)`` -> 254, ``v >= rint(100 occupied)`` -> 0, else and unknown -> 205. Scale: grey
+    ``(100 - v) / 100``, unknown -> grey 0.5 and transparent (GraphicsMagick may round a tie to the other grey
+    level; the value read back is the same). Raw: grey ``v``, unknown -> 255.
     """
     v = np.asarray(values, dtype=np.int16)[::-1]  # image rows: top row = highest y
     unknown = (v < 0) | (v > 100)
@@ -312,17 +310,15 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
     folder; ``negate`` is always 0. Cell values are ``grid.to_int8()`` (P rounded to
     percent; exactly 0.5 is unknown). Both files are written atomically, image first.
 
-    Defaults (``None``): ``mode`` from ``grid.meta`` (a loaded map's) else ``"trinary"``.
-    Thresholds: trinary/raw reuse ``grid.meta``'s when it has the same mode (so a loaded
-    map writes back unchanged), else 0.65 / 0.196 (ROS 1 map_saver's YAML values: nav2's
-    0.25 would make its own loader read unknown 205 as free). Scale uses 1.0 / 0.0, which
-    makes nav2's grey image lossless: reloading gives every int8 value back exactly, i.e.
-    P back to within 0.005 (half a percent step). Explicit scale thresholds write nav2's
-    image unchanged, and map_server then stretches values between them, as it does for
-    nav2's own files. ``image_format``: the loaded map's, else png for scale (nav2's
-    choice: only PNG keeps the alpha that marks unknown) and pgm otherwise. A scale PGM
-    loses the alpha; unknown cells are grey 128 there and reload as 50, i.e. P = 0.5,
-    still unknown in crfmap's convention (map_server publishes 50, not -1).
+    Defaults (``None``): ``mode`` from ``grid.meta`` (a loaded map's) else ``"trinary"``. Thresholds: trinary/raw
+    reuse ``grid.meta``'s when it has the same mode (so a loaded map writes back unchanged), else 0.65 / 0.196 (ROS
+    1 map_saver's YAML values: nav2's 0.25 would make its own loader read unknown 205 as free). Scale uses 1.0 /
+    0.0, which makes nav2's grey image lossless: reloading gives every int8 value back exactly, i.e. P back to
+    within 0.005 (half a percent step). Explicit scale thresholds write nav2's image unchanged, and map_server then
+    stretches values between them, as it does for nav2's own files. ``image_format``: the loaded map's, else png for
+    scale (nav2's choice: only PNG keeps the alpha that marks unknown) and pgm otherwise. A scale PGM loses the
+    alpha; unknown cells are grey 128 there and reload as 50, i.e. P = 0.5, still unknown in crfmap's convention
+    (map_server publishes 50, not -1).
 
     A trinary map reloads to the same int8 values when ``free_thresh <= 0.196`` and
     ``occupied_thresh < 1`` (the loader's view of 254, 205 and 0).

@@ -1,8 +1,7 @@
 """nav2 map_server's per-pixel rules, for Humble and for Jazzy and later (Kilted, Rolling).
 
-Both read the image with GraphicsMagick built with 16-bit quanta (Q16): every channel is
-an integer 0..65535 (an 8-bit value v becomes 257 v). From there they differ
-(``nav2_map_server/src/map_io.cpp``, ``loadMapFromFile``):
+Both read the image with GraphicsMagick built with 16-bit quanta (Q16): every channel is an integer 0..65535 (an
+8-bit value v becomes 257 v). From there they differ (``nav2_map_server/src/map_io.cpp``, ``loadMapFromFile``):
 
 Humble (per pixel, double precision)
     ``shade`` = mean of R, G, B quanta (plus ``MaxRGB - opacity`` in trinary mode when the

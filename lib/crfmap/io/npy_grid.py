@@ -37,10 +37,9 @@ def npy_sidecar_path(npy_path) -> Path:
 def save_npy(grid: OccupancyGrid, path) -> Path:
     """Save P(occupied) exactly as a 2-D float ``.npy`` [y, x] plus its sidecar YAML.
 
-    The sidecar (:func:`npy_sidecar_path`) holds ``resolution``, ``origin`` and
-    ``frame_id``; both files are written atomically and renamed as one unit
-    (:func:`crfmap.io.atomic.atomic_paths`): a concurrent :func:`load_npy` sees the old pair
-    or the new one, never one of each.
+    The sidecar (:func:`npy_sidecar_path`) holds ``resolution``, ``origin`` and ``frame_id``; both files are written
+    atomically and renamed as one unit (:func:`crfmap.io.atomic.atomic_paths`): a concurrent :func:`load_npy` sees
+    the old pair or the new one, never one of each.
 
     >>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
     PosixPath('g.npy')

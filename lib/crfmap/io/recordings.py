@@ -20,10 +20,9 @@ def is_carmen_log(path) -> bool:
 def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None, uses_odometry=False):
     """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``.
 
-    For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom'
-    the raw ODOM track interpolated at the scan stamps ('tf' does not apply).
-    ``max_range`` [m] (CARMEN only): readings at or beyond it are no-returns (see
-    :func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller writes the odometry out
+    For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom' the raw ODOM track interpolated
+    at the scan stamps ('tf' does not apply). ``max_range`` [m] (CARMEN only): readings at or beyond it are
+    no-returns (see :func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller writes the odometry out
     (``convert``), so a log's corrupt ODOM records are warned of (as they are for ``pose_source='odom'``).
     """
     path = check_path_arg(path, "log or bag")

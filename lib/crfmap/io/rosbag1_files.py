@@ -1,14 +1,13 @@
 """ROS 1 bag files whose header record is laid out as rosbag writes it, so reindex and append keep them.
 
-A ROS 1 bag (format 2.0) starts with ``#ROSBAG V2.0\\n`` and the bag-header record: a 4-byte
-header length, the header (``op``, ``index_pos``, ``conn_count``, ``chunk_count``), a 4-byte data
-length and space padding. rosbag (C++ ``Bag::writeFileHeaderRecord``, Python
-``Bag._write_file_header_record``) pads the *data* to ``4096 - header length``, so the record,
-with its two length fields, takes 4104 bytes. rosbags' Writer (0.11) pads the whole record to
-4096 bytes instead; every reader accepts that, but rosbag's reindex and append rewrite the header
-in place with rosbag's 4104 bytes, overwriting the first 8 bytes of the first chunk (the bag then
-reads as empty, or "Unindexed bag"). :class:`Rosbag1Writer` works around it: it reserves rosbag's
-4104 bytes when it opens the file and rewrites the record with rosbag's layout when it closes it.
+A ROS 1 bag (format 2.0) starts with ``#ROSBAG V2.0\\n`` and the bag-header record: a 4-byte header length, the
+header (``op``, ``index_pos``, ``conn_count``, ``chunk_count``), a 4-byte data length and space padding. rosbag (C++
+``Bag::writeFileHeaderRecord``, Python ``Bag._write_file_header_record``) pads the *data* to ``4096 - header
+length``, so the record, with its two length fields, takes 4104 bytes. rosbags' Writer (0.11) pads the whole record
+to 4096 bytes instead; every reader accepts that, but rosbag's reindex and append rewrite the header in place with
+rosbag's 4104 bytes, overwriting the first 8 bytes of the first chunk (the bag then reads as empty, or "Unindexed
+bag"). :class:`Rosbag1Writer` works around it: it reserves rosbag's 4104 bytes when it opens the file and rewrites
+the record with rosbag's layout when it closes it.
 """
 from __future__ import annotations
 

@@ -6,16 +6,14 @@ cell to its end point's cell: the cells passed are *empty hits*, the end cell an
 
 - ``model="arctan"`` (the thesis, eq. 16): with x = occupied hits - empty hits over all
   beams, ``P = 0.5 + atan(x) / pi``. Cells never passed stay 0.5 (unknown).
-- ``model="logodds"`` (the baseline of Probabilistic Robotics, ch. 9, Table 9.1): per
-  scan, every cell the scan observes gets ``l += log(p/(1-p))`` once, with ``p = p_hit``
-  if a beam ended in it (occupied takes precedence, as in OctoMap) and ``p = p_miss``
-  otherwise; ``l`` is clamped to ``[-logodds_limit, logodds_limit]`` after each update;
-  ``P = 1 - 1 / (1 + exp(l))``.
+- ``model="logodds"`` (the baseline of Probabilistic Robotics, ch. 9, Table 9.1): per scan, every cell the scan
+  observes gets ``l += log(p/(1-p))`` once, with ``p = p_hit`` if a beam ended in it (occupied takes precedence, as
+  in OctoMap) and ``p = p_miss`` otherwise; ``l`` is clamped to ``[-logodds_limit, logodds_limit]`` after each
+  update; ``P = 1 - 1 / (1 + exp(l))``.
 
-Readings follow REP 117: NaN (invalid) and -Inf (too close) are dropped, finite readings
-outside [range_min, range_max] are dropped, +Inf (and a finite reading equal to range_max,
-the legacy max-range code) means "no return": it clears free space up to
-``free_on_no_return`` metres when asked, and is dropped otherwise.
+Readings follow REP 117: NaN (invalid) and -Inf (too close) are dropped, finite readings outside [range_min,
+range_max] are dropped, +Inf (and a finite reading equal to range_max, the legacy max-range code) means "no return":
+it clears free space up to ``free_on_no_return`` metres when asked, and is dropped otherwise.
 """
 from __future__ import annotations
 
@@ -175,9 +173,8 @@ def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_rang
                progress=False):
     """Occupied and empty hit counts per cell, ``[y, x]`` int32 arrays (thesis sec. 3.2).
 
-    The grid's lower-left corner is ``bounds[:2]`` when bounds are given, else the
-    data's padded bounding box (:func:`scan_bounds`) snapped down to multiples of
-    ``resolution`` (the origin :func:`build_grid` reports).
+    The grid's lower-left corner is ``bounds[:2]`` when bounds are given, else the data's padded bounding box
+    (:func:`scan_bounds`) snapped down to multiples of ``resolution`` (the origin :func:`build_grid` reports).
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
@@ -306,37 +303,19 @@ def logodds_to_probability(logodds):
 def build_grid(scans, resolution, model="arctan", bounds=None, free_on_no_return=False,
                max_range_is_no_return=True, p_hit=0.7, p_miss=0.4, logodds_limit=5.0,
                progress=False) -> OccupancyGrid:
-    """Occupancy grid from scans with known laser poses.
+    """Occupancy grid from scans with known laser poses (x, y, yaw per scan, in ``scans.frame_id``).
 
-    Parameters
-    ----------
-    scans : crfmap.recording.ScanSet
-        Ranges [m] and the laser's pose (x, y, yaw) per scan in ``scans.frame_id``.
-    resolution : float
-        Cell size [m].
-    model : {'arctan', 'logodds'}
-        The thesis's hit-count model (eq. 16) or the log-odds baseline.
-    bounds : None or (xmin, ymin, xmax, ymax)
-        Area [m] to map; by default the data's bounding box plus ``BOUNDS_PADDING``.
-        Beams leaving given bounds are cut at its edge (no occupied hit there).
-    free_on_no_return : False, True or float
-        Range [m] up to which a no-return beam (+Inf, or range_max when
-        ``max_range_is_no_return``) marks cells free; True means ``range_max``.
-    p_hit, p_miss : float
-        Log-odds model: P(occupied) given a beam ended in / passed through the cell.
-    logodds_limit : float
-        Log-odds model: ``l`` is clamped to ``[-limit, limit]`` after each update.
-    progress : bool
-        Show a tqdm progress bar.
+    ``resolution``: the cell size [m]. ``model``: ``"arctan"``, the thesis's hit-count model (eq. 16), or
+    ``"logodds"``, the log-odds baseline, with ``p_hit`` / ``p_miss`` (P(occupied) given a beam ended in / passed
+    through the cell) and ``l`` clamped to ``[-logodds_limit, logodds_limit]`` after each update. ``bounds`` (xmin,
+    ymin, xmax, ymax) [m]: the area to map, by default the data's bounding box plus ``BOUNDS_PADDING``; beams leaving
+    given bounds are cut at its edge (no occupied hit there). ``free_on_no_return``: the range [m] up to which a
+    no-return beam (+Inf, or range_max when ``max_range_is_no_return``) marks cells free (True: ``range_max``).
+    ``progress``: a tqdm bar.
 
-    Returns
-    -------
-    OccupancyGrid
-        ``probability[y, x]`` (0.5 = never observed), origin at the lower-left corner,
-        ``frame_id = scans.frame_id``; ``meta`` holds the model and counts.
+    The grid's ``probability[y, x]`` is 0.5 where never observed; its origin is the lower-left corner, its
+    ``frame_id`` ``scans.frame_id``, its ``meta`` the model and counts.
 
-    Examples
-    --------
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
     >>> build_grid(s, 0.1, bounds=(0, 0, 0.5, 0.1)).probability.round(2).tolist()

@@ -1,12 +1,10 @@
 """Bayesian Hilbert maps (Senanayake & Ramos, CoRL 2017): a continuous occupancy map, the ``hilbert`` peer.
 
-P(occupied at x) is a logistic regression on radial-basis features
-``phi_j(x) = exp(-gamma |x - c_j|^2)`` with centres ``c_j`` on a square grid
-(``feature_spacing`` apart, ``gamma = 1 / (2 length_scale^2)``). The weights have a diagonal
-Gaussian posterior ``N(mu, diag(sig))``, learned scan by scan: each scan is one batch whose prior
-is the previous batch's posterior (the first prior is N(0, PRIOR_VARIANCE)), and within a batch
-``EM_ITERATIONS`` rounds of the closed-form updates under the Jaakkola-Jordan bound
-(``lam(xi) = (sigmoid(xi) - 1/2) / (2 xi)``):
+P(occupied at x) is a logistic regression on radial-basis features ``phi_j(x) = exp(-gamma |x - c_j|^2)`` with
+centres ``c_j`` on a square grid (``feature_spacing`` apart, ``gamma = 1 / (2 length_scale^2)``). The weights have a
+diagonal Gaussian posterior ``N(mu, diag(sig))``, learned scan by scan: each scan is one batch whose prior is the
+previous batch's posterior (the first prior is N(0, PRIOR_VARIANCE)), and within a batch ``EM_ITERATIONS`` rounds of
+the closed-form updates under the Jaakkola-Jordan bound (``lam(xi) = (sigmoid(xi) - 1/2) / (2 xi)``):
 
 - ``sig_j = 1 / (1 / sig0_j + 2 sum_n lam(xi_n) phi_nj^2)``,
   ``mu_j = sig_j (mu0_j / sig0_j + sum_n (y_n - 1/2) phi_nj)``,
@@ -19,11 +17,10 @@ precision's diagonal only (the authors' choice); with a single feature it is exa
 returns the probit-approximated predictive ``sigmoid(a / sqrt(1 + pi s2 / 8))`` with
 ``a = phi . mu``, ``s2 = phi^2 . sig``: far from every feature it is 0.5.
 
-Training data per scan: each returned beam's end point (label 1) and free points every
-``free_spacing`` metres along the beam from the sensor up to one spacing before the end (label 0).
-Features below ``exp(-CUTOFF^2 / 2)`` (beyond ``CUTOFF`` length scales) are dropped, so each point
-touches only the few dozen centres near it (the authors' dense kernel matrix would not fit a
-building).
+Training data per scan: each returned beam's end point (label 1) and free points every ``free_spacing`` metres along
+the beam from the sensor up to one spacing before the end (label 0). Features below ``exp(-CUTOFF^2 / 2)`` (beyond
+``CUTOFF`` length scales) are dropped, so each point touches only the few dozen centres near it (the authors' dense
+kernel matrix would not fit a building).
 
 >>> m = HilbertMap((0.0, 0.0, 2.0, 2.0), feature_spacing=0.5, length_scale=0.3)
 >>> m.fit_batch(np.array([[1.5, 1.5], [0.0, 0.0]]), np.array([1.0, 0.0]))

@@ -179,9 +179,8 @@ def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, cla
 class OctoMapUpdater:
     """OctoMap's update one scan at a time (a robot mapping as it drives): the state of :func:`octomap_grid`.
 
-    After :meth:`add_scan` of every scan of a recording, in order, :meth:`grid` equals
-    :func:`octomap_grid` of it on the same grid with the same parameters (each scan updates a cell
-    at most once, as there).
+    After :meth:`add_scan` of every scan of a recording, in order, :meth:`grid` equals :func:`octomap_grid` of it on
+    the same grid with the same parameters (each scan updates a cell at most once, as there).
 
     >>> up = OctoMapUpdater.for_sensor((0, 0, 0.5, 0.1), 0.1, 0.0, 0.1, 1, 0.05, 5.0)
     >>> up.add_scan(np.array([0.36], np.float32), (0.05, 0.05, 0.0))

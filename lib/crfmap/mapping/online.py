@@ -1,21 +1,18 @@
 """Online mapping: integrate laser scans one by one, keep the CRF's beliefs fresh around the robot.
 
-Thesis sec. 3.4.4 bounds message passing to a disc around the robot so LBP can run while
-mapping. :class:`OnlineMapper` keeps the hit counts of the arctan grid (thesis eq. 16) and the
-LBP messages between scans. :meth:`OnlineMapper.integrate` adds one scan's hits (the grid
-builder's own ray casting), refreshes the observation of every cell a beam passed, and runs
-checkerboard LBP on the cells within ``radius`` of the laser, warm-started from the messages
-the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to
-convergence, which gives the preset's offline refinement of the same scans
-(``preset.refine(hits=..., passes=...)`` on :func:`crfmap.mapping.builder.count_hits`) when LBP has
-one fixed point.
+Thesis sec. 3.4.4 bounds message passing to a disc around the robot so LBP can run while mapping.
+:class:`OnlineMapper` keeps the hit counts of the arctan grid (thesis eq. 16) and the LBP messages between scans.
+:meth:`OnlineMapper.integrate` adds one scan's hits (the grid builder's own ray casting), refreshes the observation
+of every cell a beam passed, and runs checkerboard LBP on the cells within ``radius`` of the laser, warm-started
+from the messages the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to convergence,
+which gives the preset's offline refinement of the same scans (``preset.refine(hits=..., passes=...)`` on
+:func:`crfmap.mapping.builder.count_hits`) when LBP has one fixed point.
 
 The CRF is a preset (:mod:`crfmap.crf.presets`), as for ``crfmap infer``: by default
-:data:`~crfmap.crf.presets.DEFAULT_PRESET` (certainty-scaled observations, a coupling
-below critical, LBP only near observations), so walls seen many times stay; ``preset="thesis"``
-is the thesis's table [[10, 1], [1, 10]] over the whole grid. Hard evidence never arises here:
-every preset's observation lies strictly inside (0, 1), and no link table (no all-zero row) makes
-such a cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
+:data:`~crfmap.crf.presets.DEFAULT_PRESET` (certainty-scaled observations, a coupling below critical, LBP only near
+observations), so walls seen many times stay; ``preset="thesis"`` is the thesis's table [[10, 1], [1, 10]] over the
+whole grid. Hard evidence never arises here: every preset's observation lies strictly inside (0, 1), and no link
+table (no all-zero row) makes such a cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet
@@ -93,33 +90,20 @@ class ScanUpdate:
 class OnlineMapper:
     """An arctan occupancy grid built scan by scan, with bounded LBP around the robot.
 
-    Parameters
-    ----------
-    hits : crfmap.mapping.builder.HitCounter
-        The grid and the laser's geometry, and the hit counts (fresh, or holding earlier scans);
-        :meth:`for_scans` and :meth:`for_sensor` make one.
-    preset : None, str or crfmap.crf.presets.Preset
-        The CRF: its observation model, hidden and link tables, pairing, margin and temperature
-        (None: :data:`~crfmap.crf.presets.DEFAULT_PRESET`; a name from
-        :data:`~crfmap.crf.presets.PRESETS`, e.g. "thesis").
-    hidden, link, pairing : optional
-        Tables (see :mod:`crfmap.crf.model.potentials`) that make a custom preset instead
-        (:func:`~crfmap.crf.presets.custom_preset`: the arctan grid's P through ``link``).
-    radius : float
-        [m] LBP runs on the cells whose centres lie within this distance of the laser.
-    max_iter : int
-        LBP iterations per scan at most (fewer once the change falls below ``tol``).
-    tol : float
-        Largest message change that counts as settled.
-    dtype : np.float32 or np.float64
-    margin : "preset", None or int
-        [cells] The preset's margin ("preset", the default) or another: only cells within
-        ``margin`` cells (Chebyshev distance) of a cell some beam has observed send messages, as
-        with ``region=near_known(grid, margin)`` in :func:`crfmap.crf.inference.lbp.infer`: gaps
-        and occlusions up to ``margin`` cells deep are filled and the unexplored rest stays
-        unknown (exactly 0.5, as the preset's offline refinement leaves it). None: every cell in
-        the disc sends (the thesis's model; with a strong coupling it fills unexplored space with
-        its border's state).
+    ``hits`` (:class:`crfmap.mapping.builder.HitCounter`): the grid, the laser's geometry and the hit counts (fresh,
+    or holding earlier scans); :meth:`for_scans` and :meth:`for_sensor` make one. ``preset``: the CRF, its
+    observation model, hidden and link tables, pairing, margin and temperature (None:
+    :data:`~crfmap.crf.presets.DEFAULT_PRESET`; a name from :data:`~crfmap.crf.presets.PRESETS`, e.g. "thesis");
+    ``hidden``, ``link``, ``pairing`` (:mod:`crfmap.crf.model.potentials`) make a custom preset instead
+    (:func:`~crfmap.crf.presets.custom_preset`: the arctan grid's P through ``link``). LBP runs on the cells whose
+    centres lie within ``radius`` [m] of the laser, for at most ``max_iter`` iterations per scan (fewer once the
+    largest message change falls below ``tol``).
+
+    ``margin`` [cells]: the preset's (``"preset"``, the default) or another: only cells within ``margin`` cells
+    (Chebyshev distance) of a cell some beam has observed send messages, as with ``region=near_known(grid, margin)``
+    in :func:`crfmap.crf.inference.lbp.infer`: gaps and occlusions up to ``margin`` cells deep are filled and the
+    unexplored rest stays unknown (exactly 0.5, as the preset's offline refinement leaves it). None: every cell in
+    the disc sends (the thesis's model; with a strong coupling it fills unexplored space with its border's state).
     """
 
     def __init__(self, hits: builder.HitCounter, preset=None, *, hidden=None, link=None, pairing=None,

@@ -1,27 +1,24 @@
 """The live node's core, shared by every middleware: refine maps as they come, or map from scans and tf.
 
-- :class:`RefineNode` subscribes to a nav_msgs/OccupancyGrid topic, refines the newest map
-  with the default preset, exactly as ``crfmap infer`` refines a map file
-  (:func:`refine_grid`), and publishes the result with the input's header and info, at most
-  once per ``period`` seconds. Maps that arrive while one is being refined replace each other:
-  only the newest is refined, stale ones are dropped, not queued.
-- :class:`MapNode` subscribes to sensor_msgs/LaserScan and tf, places each scan at its own
-  stamp once tf covers it (:class:`crfmap.ros.tf_buffer.TfBuffer`), integrates it with
-  :class:`crfmap.mapping.OnlineMapper` under a preset (the default preset unless told otherwise, as
-  ``crfmap infer``), and publishes the beliefs on ``/map`` and ``/map_metadata`` at most once per
-  ``period``; when it stops it runs LBP on the whole map to convergence and publishes that final map
-  (the preset's offline refinement of the integrated scans, :meth:`MapNode.finish`). Every scan is accounted for: received,
-  integrated, skipped (with the reason) or still waiting for tf, and the backend's count of scans
-  lost in transport (best-effort samples dropped, :meth:`DdsBackend.lost`) joins the summary; a
-  ``scan_log`` file gets one line per integrated scan (stamp [ns], laser pose x y yaw in the fixed
-  frame), so what a published map holds can be rebuilt exactly.
+- :class:`RefineNode` subscribes to a nav_msgs/OccupancyGrid topic, refines the newest map with the default preset,
+  exactly as ``crfmap infer`` refines a map file (:func:`refine_grid`), and publishes the result with the input's
+  header and info, at most once per ``period`` seconds. Maps that arrive while one is being refined replace each
+  other: only the newest is refined, stale ones are dropped, not queued.
+- :class:`MapNode` subscribes to sensor_msgs/LaserScan and tf, places each scan at its own stamp once tf covers it
+  (:class:`crfmap.ros.tf_buffer.TfBuffer`), integrates it with :class:`crfmap.mapping.OnlineMapper` under a preset
+  (the default preset unless told otherwise, as ``crfmap infer``), and publishes the beliefs on ``/map`` and
+  ``/map_metadata`` at most once per ``period``; when it stops it runs LBP on the whole map to convergence and
+  publishes that final map (the preset's offline refinement of the integrated scans, :meth:`MapNode.finish`). Every
+  scan is accounted for: received, integrated, skipped (with the reason) or still waiting for tf, and the backend's
+  count of scans lost in transport (best-effort samples dropped, :meth:`DdsBackend.lost`) joins the summary; a
+  ``scan_log`` file gets one line per integrated scan (stamp [ns], laser pose x y yaw in the fixed frame), so what a
+  published map holds can be rebuilt exactly.
 
-A message the node cannot use is skipped and logged once per kind with the reason
-(:class:`BadMessages`); the node never publishes a map made from one. :func:`spin` runs a node
-over a backend (:mod:`crfmap.ros.dds`, :mod:`crfmap.ros.rclpy_backend`,
-:mod:`crfmap.ros.rospy_backend`), which only moves messages: ``subscribe(topic, kind, qos,
-callback)``, ``publisher(topic, kind, qos) -> send(GridMessage)``, ``spin_once(timeout)``,
-``close()``; ``kind`` is 'grid', 'metadata', 'scan' or 'tf'.
+A message the node cannot use is skipped and logged once per kind with the reason (:class:`BadMessages`); the node
+never publishes a map made from one. :func:`spin` runs a node over a backend (:mod:`crfmap.ros.dds`,
+:mod:`crfmap.ros.rclpy_backend`, :mod:`crfmap.ros.rospy_backend`), which only moves messages: ``subscribe(topic,
+kind, qos, callback)``, ``publisher(topic, kind, qos) -> send(GridMessage)``, ``spin_once(timeout)``, ``close()``;
+``kind`` is 'grid', 'metadata', 'scan' or 'tf'.
 """
 from __future__ import annotations
 

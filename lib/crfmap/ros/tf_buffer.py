@@ -1,12 +1,11 @@
 """Transforms as they arrive, and the laser's pose at a scan's stamp once tf covers it (tf2's rules, planar).
 
-A live mapper cannot place a scan until every moving transform between the laser and the
-fixed frame has a sample at or after the scan's stamp (tf2's ``canTransform``); a scan older
-than the first sample of one of them never will be placed. :meth:`TfBuffer.lookup` says
-which, and gives the pose exactly as :func:`crfmap.io.bag_reader.read_bag` computes it from the
-same transforms (the static chain from the laser up, then each moving transform interpolated
-at the stamp, :class:`crfmap.frames.TfTree`), so a bag played into the node maps the same as
-the bag read from its file.
+A live mapper cannot place a scan until every moving transform between the laser and the fixed frame has a sample at
+or after the scan's stamp (tf2's ``canTransform``); a scan older than the first sample of one of them never will be
+placed. :meth:`TfBuffer.lookup` says which, and gives the pose exactly as :func:`crfmap.io.bag_reader.read_bag`
+computes it from the same transforms (the static chain from the laser up, then each moving transform interpolated at
+the stamp, :class:`crfmap.frames.TfTree`), so a bag played into the node maps the same as the bag read from its
+file.
 
 >>> buffer = TfBuffer()
 >>> buffer.add(Transform(0, "base_link", "laser", (0.1, 0.0, 0.0)), static=True)

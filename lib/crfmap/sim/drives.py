@@ -1,9 +1,8 @@
 """How :func:`crfmap.sim.simulator.simulate` drives the robot: one small settings object per mode.
 
-Each drive holds only the settings that apply to it, so a setting cannot be passed to a
-mode that would ignore it: ``Explore(stride=4)``, ``Look(turns=2)``,
-``Waypoints(waypoints=..., scan_period=1.0)``. What every drive shares (start pose, ``dt``,
-speed limits) stays a keyword of ``simulate``. A mode's name (``"explore"``, ``"look"``,
+Each drive holds only the settings that apply to it, so a setting cannot be passed to a mode that would ignore it:
+``Explore(stride=4)``, ``Look(turns=2)``, ``Waypoints(waypoints=..., scan_period=1.0)``. What every drive shares
+(start pose, ``dt``, speed limits) stays a keyword of ``simulate``. A mode's name (``"explore"``, ``"look"``,
 ``"waypoints"``) means its drive with the defaults.
 
 >>> drive_for("look")

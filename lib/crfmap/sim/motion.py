@@ -1,19 +1,16 @@
 """How the simulated robot moves: Twist commands, the true motion they cause, and the three drives.
 
-The robot follows Twist commands (v [m/s], w [rad/s]) at a fixed ``dt``; each step it
-turns by ``w * dt`` and moves ``v * dt`` along the mean heading of the step. The true
-motion is the commanded one, except that a step whose straight path would put the robot
-on an occupied cell (or too near one for its radius) does not translate. A drive returns
-a :class:`Motion`: the commands, the executed (distance, turn) steps, the true poses and
-the steps at which the laser scans. :func:`crfmap.sim.simulator.simulate` turns it into
-odometry and scans.
+The robot follows Twist commands (v [m/s], w [rad/s]) at a fixed ``dt``; each step it turns by ``w * dt`` and moves
+``v * dt`` along the mean heading of the step. The true motion is the commanded one, except that a step whose
+straight path would put the robot on an occupied cell (or too near one for its radius) does not translate. A drive
+returns a :class:`Motion`: the commands, the executed (distance, turn) steps, the true poses and the steps at which
+the laser scans. :func:`crfmap.sim.simulator.simulate` turns it into odometry and scans.
 
 Drives (the modes of :func:`crfmap.sim.simulator.simulate`):
 
-- ``"explore"`` (:func:`explore_reachable`): drive cell to cell along a depth-first tour of
-  every reachable cell and look around (a full turn in place, or one scan for a 360 deg
-  laser) at each newly visited cell, or at fewer with ``stride``; the thesis's "the robot
-  has moved to every cell ... it can physically access".
+- ``"explore"`` (:func:`explore_reachable`): drive cell to cell along a depth-first tour of every reachable cell and
+  look around (a full turn in place, or one scan for a 360 deg laser) at each newly visited cell, or at fewer with
+  ``stride``; the thesis's "the robot has moved to every cell ... it can physically access".
 - ``"look"`` (:func:`look_around`): stand at the start and turn in place (Fig. 28).
 - ``"waypoints"`` (:func:`follow_waypoints`): plan a grid path through the waypoints and
   drive it with a turn-then-go controller on the true pose, scanning at a fixed rate.

@@ -1,28 +1,24 @@
 """A robot with a laser scanner in a ground-truth grid (thesis sec. 3.1), recorded as a bag would hold it.
 
-Sensing. Each beam is ray-cast with Bresenham's line (:func:`crfmap.raycast.first_hit_kernel`,
-thesis Listing 1) from the laser's cell to the cell of the beam's end point at
-``range_max``; the range of a hit is the Euclidean distance from the laser's position to
-the centre of the hit cell (so axis-aligned beams from a cell centre read whole cells).
-Hits farther than ``range_max`` are no return (``+inf``, REP 117; the thesis wrote -1,
-:data:`LEGACY_NO_RETURN`); hits nearer than ``range_min`` are ``-inf`` (too close). Outside
-the grid is empty space. Range noise is the thesis's ``d +- C``: ``d + s * c`` with ``s`` a
-random sign and ``c`` uniform in ``[0, C]`` (optionally plus Gaussian noise), applied to
-returns only and floored at 0; a noisy value may leave ``[range_min, range_max]``, and
-readers discard it then, as REP 117 asks.
+Sensing. Each beam is ray-cast with Bresenham's line (:func:`crfmap.raycast.first_hit_kernel`, thesis Listing 1)
+from the laser's cell to the cell of the beam's end point at ``range_max``; the range of a hit is the Euclidean
+distance from the laser's position to the centre of the hit cell (so axis-aligned beams from a cell centre read
+whole cells). Hits farther than ``range_max`` are no return (``+inf``, REP 117; the thesis wrote -1,
+:data:`LEGACY_NO_RETURN`); hits nearer than ``range_min`` are ``-inf`` (too close). Outside the grid is empty space.
+Range noise is the thesis's ``d +- C``: ``d + s * c`` with ``s`` a random sign and ``c`` uniform in ``[0, C]``
+(optionally plus Gaussian noise), applied to returns only and floored at 0; a noisy value may leave ``[range_min,
+range_max]``, and readers discard it then, as REP 117 asks.
 
-Motion (:mod:`crfmap.sim.motion`). The robot follows Twist commands at a fixed ``dt``; a
-step that would run into a wall does not translate. Odometry integrates what the wheels
-report: every executed translation ``d`` reads ``d +- C_lin`` and every executed turn ``a``
-reads ``a +- C_yaw`` (the thesis's noise "at each interval of movement", Fig. 16); wheels
-that do not turn add no error. Odometry starts at (0, 0, 0) in ``odom``; ``map -> odom``
-is the start pose (``recording.meta["map_to_odom"]``).
+Motion (:mod:`crfmap.sim.motion`). The robot follows Twist commands at a fixed ``dt``; a step that would run into a
+wall does not translate. Odometry integrates what the wheels report: every executed translation ``d`` reads ``d +-
+C_lin`` and every executed turn ``a`` reads ``a +- C_yaw`` (the thesis's noise "at each interval of movement", Fig.
+16); wheels that do not turn add no error. Odometry starts at (0, 0, 0) in ``odom``; ``map -> odom`` is the start
+pose (``recording.meta["map_to_odom"]``).
 
-Drives (:mod:`crfmap.sim.drives`, the ``drive`` of :func:`simulate`): :class:`Explore` (visit every
-reachable cell and look around), :class:`Look` (turn in place at the start, Fig. 28) and
-:class:`Waypoints` (drive through waypoints, scanning at a fixed rate); each holds only its own
-settings, and a mode name (``"explore"``, ``"look"``, ``"waypoints"``) means its drive with the
-defaults.
+Drives (:mod:`crfmap.sim.drives`, the ``drive`` of :func:`simulate`): :class:`Explore` (visit every reachable cell
+and look around), :class:`Look` (turn in place at the start, Fig. 28) and :class:`Waypoints` (drive through
+waypoints, scanning at a fixed rate); each holds only its own settings, and a mode name (``"explore"``, ``"look"``,
+``"waypoints"``) means its drive with the defaults.
 
 >>> from crfmap.world.scenes import enclosed_boxes
 >>> rec = simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), "look", progress=False)
@@ -76,15 +72,10 @@ def _cast_scans(occupied, lx, ly, lyaw, angles, reach, out):
 
 
 def cast_rays(truth: OccupancyGrid, laser: Laser, laser_poses, progress=False) -> np.ndarray:
-    """Noiseless ranges [m] of every beam from every laser pose: (n_poses, n_beams) float64.
+    """Noiseless ranges [m] of every beam from every laser pose (x [m], y [m], yaw [rad] in the grid's frame).
 
-    ``+inf`` = nothing within ``range_max``; ``-inf`` = a hit nearer than ``range_min``.
-
-    Parameters
-    ----------
-    truth : OccupancyGrid, occupied where P > 0.5
-    laser : Laser
-    laser_poses : (n, 3) x [m], y [m], yaw [rad] of the laser in the grid's frame
+    An (n_poses, n_beams) float64 array: ``+inf`` = nothing within ``range_max``; ``-inf`` = a hit nearer than
+    ``range_min``. ``truth`` is occupied where P > 0.5.
 
     >>> from crfmap.world.scenes import enclosed_boxes
     >>> s = enclosed_boxes("train")
@@ -160,32 +151,24 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
              angular_speed=1.5, t0=START_TIME, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
-    Parameters
-    ----------
-    scene : Scene
-    laser : Laser (default ``Laser()``: 360 beams over 360 deg, 0.05-5 m)
-    drive : :class:`Explore`, :class:`Look`, :class:`Waypoints`, or a mode name ``"explore"``,
-        ``"look"``, ``"waypoints"`` meaning that drive with its defaults (default: ``scene.default_mode``).
-        Mode-specific settings (``stride``, ``turns``, ``waypoints``, ``scan_period``,
-        ``robot_radius``) belong to the drive; given here they are an InputError.
-    seed : int, all noise comes from ``np.random.default_rng(seed)``
-    range_noise : float C [m], ranges read ``d +- c``, ``c`` ~ U[0, C]
-    range_sigma : float [m], extra Gaussian range noise
-    odometry_noise : C [m] or (C_lin [m], C_yaw [rad]) per step: odometry reads each
-        executed translation ``+- c`` (and each executed turn ``+- c_yaw``); 0 = perfect odometry
-    laser_mount : (x, y, yaw) of the laser in base_link
-    start : (x, y, yaw) [m, rad] or None (``scene.start``)
-    dt : float [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which
-        only turns), ``angular_speed`` [rad/s] limits
-    t0 : float [s], stamp of the first pose (default :data:`START_TIME`; a ROS bag refuses 0)
-    progress : bool, show a progress bar for the ray casting
+    - ``laser``: default ``Laser()``: 360 beams over 360 deg, 0.05-5 m.
+    - ``drive``: :class:`Explore`, :class:`Look`, :class:`Waypoints`, or a mode name ``"explore"``, ``"look"``,
+      ``"waypoints"`` meaning that drive with its defaults (default: ``scene.default_mode``). Mode-specific settings
+      (``stride``, ``turns``, ``waypoints``, ``scan_period``, ``robot_radius``) belong to the drive; given here they
+      are an InputError.
+    - ``seed``: all noise comes from ``np.random.default_rng(seed)``. ``range_noise`` C [m]: ranges read ``d +- c``,
+      ``c`` ~ U[0, C]; ``range_sigma`` [m]: extra Gaussian range noise. ``odometry_noise``: C [m] or (C_lin [m],
+      C_yaw [rad]) per step: odometry reads each executed translation ``+- c`` (and each executed turn ``+- c_yaw``);
+      0 = perfect odometry.
+    - ``laser_mount``: (x, y, yaw) of the laser in base_link; ``start``: (x, y, yaw) [m, rad] or None
+      (``scene.start``).
+    - ``dt`` [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which only turns) and
+      ``angular_speed`` [rad/s] limits. ``t0`` [s]: the stamp of the first pose (default :data:`START_TIME`; a ROS bag
+      refuses 0). ``progress``: a progress bar for the ray casting.
 
-    Returns
-    -------
-    Recording with ``scans`` (true laser poses in map), ``odometry`` (base_link in odom,
-    noisy, twists = measured), ``true_poses`` (base_link in map), ``cmd_vel`` (twists =
-    commanded), ``laser_mount``, ``ground_truth = scene.truth`` and ``meta`` (all settings,
-    ``map_to_odom``). Identical for identical arguments.
+    The recording holds ``scans`` (true laser poses in map), ``odometry`` (base_link in odom, noisy, twists =
+    measured), ``true_poses`` (base_link in map), ``cmd_vel`` (twists = commanded), ``laser_mount``,
+    ``ground_truth = scene.truth`` and ``meta`` (all settings, ``map_to_odom``). Identical for identical arguments.
     """
     for name in misplaced:
         if name in DRIVE_SETTINGS:

@@ -1,9 +1,8 @@
 """A procedurally generated office floor: rooms, doors and desks along corridors, any size.
 
-The thesis scenes (:mod:`crfmap.world.scenes`) are small rooms; this one is a floor plan a
-mobile robot would map, for runs at realistic scale. Everything random comes from
-``seed``; the waypoints visit the centres of the rooms a robot of ``robot_radius`` can
-reach from the start.
+The thesis scenes (:mod:`crfmap.world.scenes`) are small rooms; this one is a floor plan a mobile robot would map,
+for runs at realistic scale. Everything random comes from ``seed``; the waypoints visit the centres of the rooms a
+robot of ``robot_radius`` can reach from the start.
 
 >>> s = office_floor(8.0, 6.0, 0.1, seed=0)
 >>> s.name, s.default_mode, s.truth.shape
@@ -41,19 +40,14 @@ def _split(rng, total, lo, hi, wall):
 def office_floor(width_m=20.0, height_m=15.0, resolution=0.05, seed=0, robot_radius=0.15) -> Scene:
     """A procedurally generated office floor: rooms with doors and desks along corridors.
 
-    Layout (y up): a vertical corridor along the left wall joins horizontal corridors;
-    each horizontal corridor has a row of rooms below and above it. Rooms are 2.5-4.5 m
-    wide and 2.5-4.5 m deep; every room has a 0.9 m door onto its corridor, some have a
-    door to the next room, and most have a desk against the back wall. Walls are 0.15 m.
-    The robot starts where the first corridor meets the left corridor, facing +x; the
-    waypoints visit every room centre, corridor by corridor (``default_mode="waypoints"``).
+    Layout (y up): a vertical corridor along the left wall joins horizontal corridors; each horizontal corridor has
+    a row of rooms below and above it. Rooms are 2.5-4.5 m wide and 2.5-4.5 m deep; every room has a 0.9 m door onto
+    its corridor, some have a door to the next room, and most have a desk against the back wall. Walls are 0.15 m.
+    The robot starts where the first corridor meets the left corridor, facing +x; the waypoints visit every room
+    centre, corridor by corridor (``default_mode="waypoints"``).
 
-    Parameters
-    ----------
-    width_m, height_m : float [m], at least about 6 m x 5 m
-    resolution : float [m/cell]
-    seed : int, the layout's random seed
-    robot_radius : float [m], used to check that every room can be reached
+    ``width_m`` x ``height_m`` [m]: at least about 6 m x 5 m; ``resolution`` [m/cell]; ``seed``: the layout's random
+    seed; ``robot_radius`` [m]: to check that every room can be reached.
 
     >>> s = office_floor(12.0, 10.0, 0.1, seed=3)
     >>> s.truth.shape, len(s.waypoints) >= 2

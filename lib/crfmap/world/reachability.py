@@ -1,10 +1,9 @@
 """Where a robot can be and go in a ground-truth grid: its cell, its footprint, the cells it reaches.
 
-The robot is a disc of ``robot_radius`` metres (0 = the thesis's point robot, one cell).
-A cell is traversable when the disc centred in it overlaps no occupied cell (P > 0.5;
-outside the grid counts as occupied); the robot moves between side neighbours, so it
-never slips through a diagonal gap. Functions take an :class:`~crfmap.grid.OccupancyGrid`
-or a :class:`~crfmap.world.scene.Scene` (its ``truth``).
+The robot is a disc of ``robot_radius`` metres (0 = the thesis's point robot, one cell). A cell is traversable when
+the disc centred in it overlaps no occupied cell (P > 0.5; outside the grid counts as occupied); the robot moves
+between side neighbours, so it never slips through a diagonal gap. Functions take an
+:class:`~crfmap.grid.OccupancyGrid` or a :class:`~crfmap.world.scene.Scene` (its ``truth``).
 
 >>> occ = np.zeros((5, 5)); occ[:, 2] = 1  # a wall down the middle
 >>> reachable(OccupancyGrid(occ, 0.1), (0.05, 0.05)).sum(axis=0).tolist()
@@ -114,16 +113,11 @@ def _flood_fill(free, sx, sy):
 def reachable(truth, start, robot_radius=0.0) -> np.ndarray:
     """Boolean [y, x] mask of the cells a disc robot can reach from ``start`` by moving between side neighbours.
 
-    A cell is traversable when the robot (a disc of ``robot_radius`` metres centred in the
-    cell) overlaps no occupied cell (:func:`traversable`); moves go to the 4 side
-    neighbours, so the robot never slips through a diagonal gap. Cells inside enclosed
-    boxes are not reachable.
+    A cell is traversable when the robot (a disc of ``robot_radius`` metres centred in the cell) overlaps no
+    occupied cell (:func:`traversable`); moves go to the 4 side neighbours, so the robot never slips through a
+    diagonal gap. Cells inside enclosed boxes are not reachable.
 
-    Parameters
-    ----------
-    truth : OccupancyGrid (or Scene)
-    start : (x [m], y [m][, yaw]) in the grid's frame
-    robot_radius : float [m]
+    ``truth``: an OccupancyGrid (or Scene); ``start``: (x [m], y [m][, yaw]) in the grid's frame; ``robot_radius`` [m].
 
     >>> from crfmap.world.scenes import enclosed_boxes
     >>> s = enclosed_boxes("train")

@@ -19,10 +19,9 @@ MODES = ("explore", "look", "waypoints")  # how a scene is scanned (crfmap.sim.s
 class Scene:
     """A ground-truth grid and where the robot starts in it.
 
-    ``default_mode`` says how the thesis scanned such a scene (see
-    :func:`crfmap.sim.simulator.simulate`): ``"look"`` = stand at the start and turn in place,
-    ``"explore"`` = visit every reachable cell, ``"waypoints"`` = drive through
-    ``waypoints``.
+    ``default_mode`` says how the thesis scanned such a scene (see :func:`crfmap.sim.simulator.simulate`):
+    ``"look"`` = stand at the start and turn in place, ``"explore"`` = visit every reachable cell, ``"waypoints"`` =
+    drive through ``waypoints``.
     """
 
     name: str

@@ -14,11 +14,9 @@ Scenes, by name (:data:`SCENES`, :func:`make_scene`):
 - ``x``: the 32 x 32 "X" of the UGM toolbox's denoising demo (thesis Fig. 20), stroke occupied.
 - ``occluded-train`` / ``occluded-test``: walls partly hidden behind small foreground
   walls, robot upper left (Fig. 27 / Fig. 32).
-- ``enclosed-train`` / ``enclosed-test``: a room with filled boxes the robot cannot enter
-  (Fig. 36 / Fig. 37); ``hollow-train`` / ``hollow-test``: the same with unfilled
-  (enclosed, empty-centred) boxes (Fig. 40).
-- ``office``: a procedurally generated floor of rooms, doors and corridors, any size
-  (:mod:`crfmap.world.office`).
+- ``enclosed-train`` / ``enclosed-test``: a room with filled boxes the robot cannot enter (Fig. 36 / Fig. 37);
+  ``hollow-train`` / ``hollow-test``: the same with unfilled (enclosed, empty-centred) boxes (Fig. 40).
+- ``office``: a procedurally generated floor of rooms, doors and corridors, any size (:mod:`crfmap.world.office`).
 
 Where a robot can go in a scene (``traversable``, ``reachable``, ...) is
 :mod:`crfmap.world.reachability`; the :class:`~crfmap.world.scene.Scene` itself is :mod:`crfmap.world.scene`.
@@ -109,11 +107,10 @@ def _resize_nearest(img, h, w):
 def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
     """The "X" denoising image (thesis Fig. 20) as a 0/1 grid: the X stroke is occupied (1).
 
-    Read from ``images/ugm_X_32x32.csv`` under the data folder (UGM's ``X.mat``: 1 = white
-    background, 0 = stroke, so the values are inverted here), resized nearest-neighbour
-    if ``shape`` is not 32; when the file is absent an X of the same proportions is drawn
-    (``truth.meta["source"]`` says which). The CSV's first row is the image's top, so
-    the rows are flipped: drawn with ``origin="lower"`` the X looks as in the toolbox.
+    Read from ``images/ugm_X_32x32.csv`` under the data folder (UGM's ``X.mat``: 1 = white background, 0 = stroke,
+    so the values are inverted here), resized nearest-neighbour if ``shape`` is not 32; when the file is absent an X
+    of the same proportions is drawn (``truth.meta["source"]`` says which). The CSV's first row is the image's top,
+    so the rows are flipped: drawn with ``origin="lower"`` the X looks as in the toolbox.
 
     >>> x_image().truth.shape
     (32, 32)
@@ -165,15 +162,11 @@ def noisy_image(truth, noise=0.4, seed=0, model="gaussian") -> OccupancyGrid:
     - ``"gaussian"`` (default): ``P = clip(truth + N(0, noise**2), 0, 1)``, the noise of the
       UGM denoising demo (``X + randn/2``) clipped to probabilities. ``noise = 0.4`` gives an
       MSE against the truth of about 0.078 (the thesis reports 0.0825 before LBP).
-    - ``"flip"``: each cell's 0/1 value is flipped with probability ``noise`` and the observed
-      bit ``o`` is reported as the posterior under a flat prior: ``P = 1 - noise`` if
-      ``o = 1`` else ``noise``.
+    - ``"flip"``: each cell's 0/1 value is flipped with probability ``noise`` and the observed bit ``o`` is reported
+      as the posterior under a flat prior: ``P = 1 - noise`` if ``o = 1`` else ``noise``.
 
-    Parameters
-    ----------
-    truth : OccupancyGrid or (H, W) array of 0/1
-    noise : float, sigma (gaussian) or flip probability in [0, 0.5] (flip)
-    seed : int, for ``np.random.default_rng``
+    ``truth``: an OccupancyGrid or (H, W) array of 0/1; ``noise``: sigma (gaussian) or the flip probability in
+    [0, 0.5] (flip); ``seed``: for ``np.random.default_rng``.
 
     >>> g = noisy_image(x_image().truth, 0.4, seed=1)
     >>> bool(((g.probability >= 0) & (g.probability <= 1)).all())
@@ -223,12 +216,8 @@ def occluded_walls(variant="train", size=THESIS_SIZE, resolution=THESIS_RESOLUTI
     The thesis scanned these from the corner (``default_mode="look"``): the shadows of the
     small walls and the gaps between far beams are what LBP must fill in.
 
-    Parameters
-    ----------
-    variant : "train" or "test"
-    size : int, side [cells]; the layout is scaled from 40 cells
-    resolution : float [m/cell]
-    seed : None for the canonical layout, or an int to jitter every wall by up to 2 cells
+    ``variant``: "train" or "test"; ``size``: the side [cells], the layout scaled from 40 cells; ``resolution``
+    [m/cell]; ``seed``: None for the canonical layout, or an int to jitter every wall by up to 2 cells.
 
     >>> s = occluded_walls("test"); s.start_cell()
     (2, 37)
@@ -291,18 +280,13 @@ def _random_boxes(rng, size, n_boxes=8, gap=3):
 def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=THESIS_RESOLUTION, seed=None) -> Scene:
     """An office-like room with boxes (cubicles) the robot cannot enter (thesis Fig. 36, 37).
 
-    ``hollow=False``: the boxes are solid (occupied inside). ``hollow=True``: only their
-    one-cell outline is occupied; the centre is empty but enclosed, so no robot sees it
-    (Fig. 40, the case where LBP makes the grid worse). The thesis scanned every cell the
-    robot can reach (``default_mode="explore"``).
+    ``hollow=False``: the boxes are solid (occupied inside). ``hollow=True``: only their one-cell outline is
+    occupied; the centre is empty but enclosed, so no robot sees it (Fig. 40, the case where LBP makes the grid
+    worse). The thesis scanned every cell the robot can reach (``default_mode="explore"``).
 
-    Parameters
-    ----------
-    variant : "train" (a regular 3 x 3 arrangement with one gap) or "test" (irregular sizes)
-    hollow : bool
-    size : int [cells], layout scaled from 40
-    resolution : float [m/cell]
-    seed : None for the canonical layout, or an int for random boxes (8 boxes, 3-cell corridors)
+    ``variant``: "train" (a regular 3 x 3 arrangement with one gap) or "test" (irregular sizes); ``size`` [cells]:
+    the layout scaled from 40; ``resolution`` [m/cell]; ``seed``: None for the canonical layout, or an int for
+    random boxes (8 boxes, 3-cell corridors).
 
     >>> s = enclosed_boxes("train", hollow=True)
     >>> bool(s.truth.probability[7, 7] == 0.0)  # inside a hollow box

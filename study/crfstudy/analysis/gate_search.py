@@ -3,7 +3,7 @@
 The gated preset (:mod:`crfmap.crf.presets`) is the certainty model at coupling J followed by an evidence gate
 (:mod:`crfmap.crf.model.gating`) whose ``unobserved_prior`` pi gives never-observed cells the building's rate. Both
 were chosen on the two choosing recordings only (Intel and ACES), over three splits each (the even/odd scan split,
-temporal halves, blocks of 50 scans: :mod:`crfmap.assess.splits`), by the held-out log-loss with occupied cells
+temporal halves, blocks of 50 scans: :mod:`crfstudy.splits`), by the held-out log-loss with occupied cells
 weighted 3x (a dangerous miss, a wall called free, is the costlier error for a planner), on the grid
 J in :data:`COUPLINGS` x pi in :data:`PRIORS`. The certainty model's other constants stay as the certainty
 preset's search chose them (:mod:`crfstudy.analysis.preset_search`). The cached result
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from crfmap.assess.scansplit import scan_split
-from crfmap.assess.splits import scan_blocks, split_by, temporal_halves
+from crfstudy.splits import scan_blocks, split_by, temporal_halves
 from crfmap.crf.presets import coupling_table, get_preset
 from crfmap.data import data_file
 from crfmap.io.recordings import load_recording

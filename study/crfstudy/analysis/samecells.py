@@ -7,7 +7,7 @@ Here every method is scored on the *common* cells: those every method predicts (
 
 - :func:`fold_scores`: cross-validation (folds of held-out cells): the pooled metrics on the common
   cells, each fold's metrics, and intervals over folds of each metric and of its paired difference
-  to a reference method (the same folds: :func:`crfmap.assess.paired.paired_difference`).
+  to a reference method (the same folds: :func:`crfstudy.paired.paired_difference`).
 - :func:`block_scores`: one set of cells (no folds): the pooled metrics with a spatial-block
   bootstrap interval of each metric's paired difference to the reference (blocks of ``block``
   x ``block`` cells resampled, as :func:`crfmap.assess.scansplit.score` does).
@@ -28,7 +28,7 @@ import numpy as np
 from crfmap.assess.scansplit import DEFAULT_BLOCK
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN
-from crfmap.assess.paired import paired_difference
+from crfstudy.paired import paired_difference
 
 METRICS = ("precision", "recall", "accuracy")
 

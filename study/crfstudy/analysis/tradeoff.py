@@ -145,7 +145,7 @@ LOOP_METRICS = ("scans", "plans_into_walls", "dangerous_miss_rate", "ghosts")  #
 def closed_loop_table(records, reference="raw", n_boot=2000, seed=0) -> tuple:
     """(header, rows): per onboard kind (a row) the mean over scenes of :data:`LOOP_METRICS` and its paired
     difference to ``reference`` with a 95 % bootstrap interval over scenes."""
-    from crfmap.assess.paired import paired_difference
+    from crfstudy.paired import paired_difference
     from crfstudy.experiments.closed_loop import METRICS
 
     kinds = list(dict.fromkeys(r["kind"] for r in records))

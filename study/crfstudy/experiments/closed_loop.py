@@ -3,7 +3,7 @@
 Every onboard map kind explores the same scenes with the same seed (:func:`crfstudy.closed_loop.exploration.explore`),
 then the navigation task plans on its finished map (:func:`crfstudy.closed_loop.exploration.navigation_task`).
 :func:`paired_table` gives each kind's mean per metric and its paired difference to the raw grid with a
-bootstrap interval over the scenes (:func:`crfmap.assess.paired.paired_difference`, seeded).
+bootstrap interval over the scenes (:func:`crfstudy.paired.paired_difference`, seeded).
 
 >>> scenes = closed_loop_scenes(n_floors=1, floor_size=(6.0, 5.0), thesis_scenes=())
 >>> [label for label, _ in scenes]
@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from crfmap.assess.paired import paired_difference
+from crfstudy.paired import paired_difference
 from crfmap.errors import InputError
 from crfstudy.closed_loop.exploration import ExploreSettings, explore, map_scores, navigation_task
 from crfstudy.closed_loop.onboard import ONBOARD_MAPS

@@ -218,10 +218,10 @@ def closed_loop_goals(records, kind: str = LOOP_KIND, versus=LOOP_VERSUS, n_boot
     """Goal 7 for onboard map ``kind``: no more scans to 95 %, collisions and plans into walls than each of ``versus``.
 
     ``records``: :func:`crfstudy.experiments.closed_loop.run_closed_loop`'s, one per (scene, kind). The paired
-    difference over scenes (:func:`crfmap.assess.paired.paired_difference`) decides with the "no worse" rule;
+    difference over scenes (:func:`crfstudy.paired.paired_difference`) decides with the "no worse" rule;
     with one scene, the point estimate.
     """
-    from crfmap.assess.paired import paired_difference
+    from crfstudy.paired import paired_difference
 
     by = {(r["scene"], r["kind"]): r for r in records}
     scenes = list(dict.fromkeys(r["scene"] for r in records))

@@ -6,7 +6,7 @@ For each recording (:data:`RECORDINGS`: Intel and ACES chose the default, the ot
 (:func:`crfmap.assess.comparison.compare`: Brier, and the map as nav2 reads it, with paired spatial-block
 intervals against the raw grid), their calibration (ECE), AMCL's localisation on each map
 (:func:`crfmap.assess.localisation.compare_localisation`, the held-out scans) and, on the harder splits of
-:mod:`crfmap.assess.splits`, the default against the calibrated independent-cell models
+:mod:`crfstudy.splits`, the default against the calibrated independent-cell models
 (:mod:`crfstudy.analysis.ablations`, fitted on Intel's even / odd split as in notebook 10). The result is a
 compact dictionary of numbers (a *summary*); :func:`recording_goals` reads goals 1-6 and 8 off it.
 Goal 7 comes from the closed loop (:mod:`crfstudy.experiments.closed_loop`): :func:`closed_loop_goals`.
@@ -95,7 +95,7 @@ def harder_scores(scans, settings: GoalSettings, calibrators: dict) -> dict:
     """
     from crfmap.assess.navigation import nav_scores
     from crfmap.assess.scansplit import GROUPS, score
-    from crfmap.assess.splits import harder_splits
+    from crfstudy.splits import harder_splits
     from crfmap.crf.presets import get_preset
 
     out = {}

@@ -176,7 +176,7 @@ TINY = ng.GoalSettings(resolution=0.1, n_boot=10, peers=("octomap",), split_bloc
 def test_a_tiny_run_end_to_end_agrees_with_the_library(tmp_path):
     from crfmap.assess.navigation import nav2_classes, wall_shape
     from crfmap.assess.scansplit import scan_split, score
-    from crfmap.assess.splits import harder_splits
+    from crfstudy.splits import harder_splits
     from crfmap.crf.presets import get_preset
     from crfmap.io.carmen import read_carmen
 

@@ -59,9 +59,9 @@ def fake_data(tmp_path, monkeypatch):
 
 @pytest.fixture
 def checkout_copy(tmp_path):
-    """A copy of the checkout's notebooks, library, paper template and workflow (what the DAG reads)."""
+    """A copy of the checkout's notebooks, library, study, paper template and workflow (what the DAG reads)."""
     root = tmp_path / "checkout"
-    for folder in ("notebooks", "lib", "paper", "workflow"):
+    for folder in ("notebooks", "lib", "study", "paper", "workflow"):
         shutil.copytree(ROOT / folder, root / folder, ignore=shutil.ignore_patterns("generated", "__pycache__"))
     return root
 
@@ -85,10 +85,10 @@ def test_touching_a_module_reruns_only_the_notebooks_that_import_it(checkout_cop
         (work / relative).touch()
     snakemake("--touch", cwd=work, env=env)
     assert "Nothing to be done" in snakemake("--dry-run", cwd=work, env=env).stdout
-    module = checkout_copy / "lib" / "crfmap" / "assess" / "paired.py"
+    module = checkout_copy / "study" / "crfstudy" / "paired.py"
     module.write_text(module.read_text() + "\n# an edit\n")  # a content change (a bare touch is not one to snakemake)
     users = {f"notebook_{nb.stem}" for nb in deps.notebooks()
-             if any(p.name == "paired.py" and p.parent.name == "assess" for p in deps.library_sources(nb))}
+             if any(p.name == "paired.py" and p.parent.name == "crfstudy" for p in deps.library_sources(nb))}
     assert users and len(users) < len(deps.notebooks())
     assert planned(snakemake("--dry-run", cwd=work, env=env)) == {**{u: 1 for u in users}, "paper": 1, "all": 1}
 

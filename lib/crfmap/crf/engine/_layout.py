@@ -200,12 +200,11 @@ def _start_row(prob, y, link, floor, co, fu, un):
 @njit(nogil=True, cache=True, error_model="numpy")  # no fastmath: the grid check must see NaN
 def _pack_start(prob, link, floor, co, un, msg, stats, b):
     """Whole grid from uniform messages in one trip through memory: observation odds into ``un``, and of the
-    message slots only those no neighbour ever sends into (at the grid's edges) and the ghost rows, uniform (1).
-    The first pass sends the red cells' first half-sweep from the odds alone (``uniform_start`` of
-    :func:`crfmap.crf.engine._message_update._pass`) into every black cell's other slots, and the black cells
-    then send into every red cell's before anything reads them: no message plane is filled. Also counts per
-    row block, into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard
-    evidence).
+    message slots only those no neighbour ever sends into (at the grid's edges) and the ghost rows, uniform (1). The
+    first pass sends the red cells' first half-sweep from the odds alone (``uniform_start`` of
+    :func:`crfmap.crf.engine._message_update._pass`) into every black cell's other slots, and the black cells then
+    send into every red cell's before anything reads them: no message plane is filled. Also counts per row block,
+    into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
 
     Rows go in ``stats.shape[0]`` blocks; this call does block ``b`` (blocks are independent, so
     threads may run them at once).

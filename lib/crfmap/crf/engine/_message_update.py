@@ -7,28 +7,24 @@ sends in :func:`_send`, and a pass of several iterations (temporal blocking) is 
 point as :func:`crfmap.crf.inference._plain_kernels._send_rows`
 (cells with (x + y) even send, then the others), laid out for SIMD and for cache:
 
-- **Odds, not probabilities.** A binary message is one odds ratio r = P/(1-P). The cavity odds
-  of a sender are ``R = U * r_a * r_b * r_c`` (U the observation's odds) and the message it
-  sends through a table t (rows receiver, columns sender) is
-  ``r' = (t00 R + t01) / (t10 R + t11)``: three multiplies, two FMAs and one division, where
-  the probability form needs twice the multiplies; four divisions a cell, which do not bound its rate
-  (a two-division variant measured slower: the speed issue's notes).
+- **Odds, not probabilities.** A binary message is one odds ratio r = P/(1-P). The cavity odds of a sender are ``R =
+  U * r_a * r_b * r_c`` (U the observation's odds) and the message it sends through a table t (rows receiver,
+  columns sender) is ``r' = (t00 R + t01) / (t10 R + t11)``: three multiplies, two FMAs and one division, where the
+  probability form needs twice the multiplies; four divisions a cell, which do not bound its rate (a two-division
+  variant measured slower: the speed issue's notes).
 - **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`crfmap.crf.engine.messages`) of
   the cell in row y with colour c = (x + y) & 1 and x = 2k + ((y + c) & 1). A colour's cells
   are then contiguous: a half-sweep is a unit-stride loop that vectorises. Row 0 / H + 1 and
   column 0 / last are ghosts that absorb messages sent off the grid.
-- **Temporal blocking.** One *pass* runs T iterations (2T half-sweeps, "phases") over bands of
-  rows: first every band runs a trapezoid that shrinks by one row per phase at each inner
-  edge (a wavefront inside, so only ~2T + 2 rows are live and stay in cache), then the
-  inverted trapezoids between bands finish. Every (phase, row) is computed exactly once after
-  the three rows it depends on, so a pass equals T plain iterations.
-- **Measured changes.** The largest change of a message in probability,
-  ``|r' - r| / ((1 + r)(1 + r'))``, costs four more divisions, so it is measured only on the
-  iterations asked for (by default the last of each pass).
+- **Temporal blocking.** One *pass* runs T iterations (2T half-sweeps, "phases") over bands of rows: first every
+  band runs a trapezoid that shrinks by one row per phase at each inner edge (a wavefront inside, so only ~2T + 2
+  rows are live and stay in cache), then the inverted trapezoids between bands finish. Every (phase, row) is
+  computed exactly once after the three rows it depends on, so a pass equals T plain iterations.
+- **Measured changes.** The largest change of a message in probability, ``|r' - r| / ((1 + r)(1 + r'))``, costs four
+  more divisions, so it is measured only on the iterations asked for (by default the last of each pass).
 
-``act`` (bounded LBP) holds 1 where a cell may send; ``lo_k, hi_k`` bound the plane indices
-of each row's active cells so a small region costs little. The arrays and the Python driver
-live in :mod:`crfmap.crf.engine.packed`.
+``act`` (bounded LBP) holds 1 where a cell may send; ``lo_k, hi_k`` bound the plane indices of each row's active
+cells so a small region costs little. The arrays and the Python driver live in :mod:`crfmap.crf.engine.packed`.
 """
 from __future__ import annotations
 
@@ -383,13 +379,12 @@ def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges,
           uniform_start, stage, bel, with_beliefs):
     """Stage ``stage`` of ``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
-    A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the
-    inverted trapezoids between bands; nothing to do with one band). Rows outside [edges[0],
-    edges[-1]) must hold no sender. Iterations from ``measure_from`` on are measured
-    (max-accumulated together into ``cb``); ``uniform_start`` (whole grid, from uniform messages): the red cells'
-    first half-sweep loads no message.
-    ``with_beliefs`` (every cell sends, edges from 0 to h): the beliefs after the pass into ``bel`` [h, w], row by
-    row while the pass has it in cache (one trip through memory fewer than a beliefs pass after it).
+    A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the inverted trapezoids
+    between bands; nothing to do with one band). Rows outside [edges[0], edges[-1]) must hold no sender. Iterations
+    from ``measure_from`` on are measured (max-accumulated together into ``cb``); ``uniform_start`` (whole grid,
+    from uniform messages): the red cells' first half-sweep loads no message. ``with_beliefs`` (every cell sends,
+    edges from 0 to h): the beliefs after the pass into ``bel`` [h, w], row by row while the pass has it in cache
+    (one trip through memory fewer than a beliefs pass after it).
     """
     phases = 2 * iterations
     nb = edges.shape[0] - 1

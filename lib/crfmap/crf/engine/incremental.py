@@ -1,10 +1,9 @@
 """Checkerboard LBP kept alive between calls: observations updated cell by cell, runs on changing senders.
 
-What an online mapper needs from the fast engine (:class:`crfmap.mapping.online.OnlineMapper`
-drives it): one whole grid of packed messages that stays between scans, a way to set the
-observation of the cells a scan touched, and runs of LBP on the cells of a disc (rows with a
-column range each) or on the whole grid, warm-started from the messages left before. With a
-``margin``, only cells within ``margin`` cells (Chebyshev distance) of a cell whose observation
+What an online mapper needs from the fast engine (:class:`crfmap.mapping.online.OnlineMapper` drives it): one whole
+grid of packed messages that stays between scans, a way to set the observation of the cells a scan touched, and runs
+of LBP on the cells of a disc (rows with a column range each) or on the whole grid, warm-started from the messages
+left before. With a ``margin``, only cells within ``margin`` cells (Chebyshev distance) of a cell whose observation
 was ever set send, as ``infer(region=near_known(grid, margin))`` does for a whole grid.
 
 >>> import numpy as np
@@ -31,9 +30,8 @@ from crfmap.grid import UNKNOWN
 def _set_observations(cells, probability, link, floor, un, known, near, margin):
     """Observation odds of cells (x, y) = ``cells[i]`` from P(occupied) ``probability[i]`` into the planes ``un``.
 
-    With ``margin`` >= 0, a cell set for the first time marks every cell within ``margin``
-    (Chebyshev distance) in the red/black planes ``near``, as
-    :func:`crfmap.crf.inference.regions.near_known` does for a whole grid.
+    With ``margin`` >= 0, a cell set for the first time marks every cell within ``margin`` (Chebyshev distance) in
+    the red/black planes ``near``, as :func:`crfmap.crf.inference.regions.near_known` does for a whole grid.
     """
     height, width = known.shape if margin >= 0 else (0, 0)
     for i in range(cells.shape[0]):
@@ -50,15 +48,8 @@ def _set_observations(cells, probability, link, floor, un, known, near, margin):
 class IncrementalLBP:
     """A whole grid of ``height x width`` cells on the fast engine, iterated a little at a time.
 
-    Parameters
-    ----------
-    height, width : int
-    hidden, link : 2x2 tables (see :mod:`crfmap.crf.model.potentials`)
-    dtype : np.float32 or np.float64
-    pairing : "receiver" or "oriented"
-    margin : None or int
-        [cells] With a margin, only cells near a cell whose observation was set send; None: all.
-
+    ``hidden``, ``link``: 2x2 tables (:mod:`crfmap.crf.model.potentials`); ``pairing``: ``"receiver"`` or
+    ``"oriented"``. ``margin`` [cells]: only cells near a cell whose observation was set send; None: all.
     Every cell starts unknown (P = 0.5) with uniform messages.
     """
 

@@ -82,18 +82,10 @@ def full_extents(h, w):
 class PackedBlock:
     """Odds messages and observations of a block of ``h x w`` cells in red/black planes.
 
-    Parameters
-    ----------
-    h, w : int
-    dtype : np.float32 or np.float64
-    tables : (4, 2, 2) directional tables (rows receiver)
-    floor : float, the message floor in probability
-    arrays : (msg, un) or None
-        Planes of the right shape and dtype to reuse (their contents are overwritten), e.g.
-        from :mod:`crfmap.crf.engine.workspace`; None allocates new ones.
-    fill : bool
-        Fill the planes with uniform messages and observations; False leaves them undefined
-        for :meth:`start_uniform`, which writes every entry.
+    ``tables``: (4, 2, 2) directional tables (rows receiver); ``floor``: the message floor in probability.
+    ``arrays`` (msg, un): planes of the right shape and dtype to reuse (their contents are overwritten), e.g. from
+    :mod:`crfmap.crf.engine.workspace`; None allocates new ones. ``fill=False`` leaves the planes undefined for
+    :meth:`start_uniform`, which writes every entry (True fills them with uniform messages and observations).
     """
 
     def __init__(self, h, w, dtype, tables, floor, arrays=None, fill=True):
@@ -320,19 +312,17 @@ class PackedBlock:
             confirm_settled=True):
         """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
 
-        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring
-        its last (start at 1 after a warm start, which may stop at once; at ``block`` from
-        uniform messages, which never do: then, with a tol, two passes of ``block / 2`` first). Once two passes
-        measured, a pass is cut to the iterations the last two changes' rate predicts to reach
-        ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up to ``block - 1``
-        iterations past it. With ``freeze`` (a change smaller than ``tol``;
-        None: ``FREEZE * tol``): once fewer than SPARSE_FRACTION of the tiles moved by
-        more than ``freeze`` in a measured iteration, only those tiles and their four
-        neighbours iterate in the next pass; the others ("frozen") keep their messages, which
-        last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one
-        iteration of every cell decides (``confirm_settled`` False: the run ends there, unconfirmed, for a
-        caller that iterates on and confirms itself). ``freeze=0`` freezes only tiles that did not move at
-        all, which changes nothing.
+        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring its last (start at 1
+        after a warm start, which may stop at once; at ``block`` from uniform messages, which never do: then, with a
+        tol, two passes of ``block / 2`` first). Once two passes measured, a pass is cut to the iterations the last
+        two changes' rate predicts to reach ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up
+        to ``block - 1`` iterations past it. With ``freeze`` (a change smaller than ``tol``; None: ``FREEZE *
+        tol``): once fewer than SPARSE_FRACTION of the tiles moved by more than ``freeze`` in a measured iteration,
+        only those tiles and their four neighbours iterate in the next pass; the others ("frozen") keep their
+        messages, which last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one iteration
+        of every cell decides (``confirm_settled`` False: the run ends there, unconfirmed, for a caller that
+        iterates on and confirms itself). ``freeze=0`` freezes only tiles that did not move at all, which changes
+        nothing.
 
         With ``beliefs`` (a float64 [h, w] array) a whole-grid pass that is likely the last (it ends at max_iter,
         the rate predicts tol within it, or it confirms settled tiles) also writes the beliefs after it there,

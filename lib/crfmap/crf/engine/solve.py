@@ -1,20 +1,19 @@
 """The fast engine's one entry, :func:`solve`: pack a grid, iterate checkerboard LBP, unpack the result.
 
-Whole grid from uniform messages (the common call) costs one trip through memory before the
-iterations: :meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform` reads the observations
-once and writes the observation odds and only the message slots at the grid's edges (the first pass sends the
-red cells' first half-sweep from the odds alone, so no message plane is filled or read before it is written),
-and counts on the way the cells a caller's grid check and the hard
-evidence need (:func:`fused_start_applies`). Warm starts, hard evidence and regions take the
-general path: uniform planes, then the unary, messages, clamps or the region's box (bounded LBP
-packs only the bounding box of the region plus a one-cell halo, the receivers). A region from
-uniform messages without hard evidence (every preset's call) packs only that box too, but builds
-no whole-grid message array: its beliefs come from the packed planes (outside the box, the
-floored observation) and its messages are unpacked when first read. In float64 with a tol of at least
-:data:`MIXED_MIN_TOL` it iterates in float32 first (:meth:`~crfmap.crf.engine.packed.PackedBlock.widened`):
-float32 passes run about 1.4x faster, and float64 iterations from their messages then run until an iteration of
-every cell moves no message by tol, the same stopping rule, so the result is a float64 iteration converged to tol
-(it differs from a float64-only run by about tol, as two runs stopped at tol from different starts do).
+Whole grid from uniform messages (the common call) costs one trip through memory before the iterations:
+:meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform` reads the observations once and writes the observation
+odds and only the message slots at the grid's edges (the first pass sends the red cells' first half-sweep from the
+odds alone, so no message plane is filled or read before it is written), and counts on the way the cells a caller's
+grid check and the hard evidence need (:func:`fused_start_applies`). Warm starts, hard evidence and regions take the
+general path: uniform planes, then the unary, messages, clamps or the region's box (bounded LBP packs only the
+bounding box of the region plus a one-cell halo, the receivers). A region from uniform messages without hard
+evidence (every preset's call) packs only that box too, but builds no whole-grid message array: its beliefs come
+from the packed planes (outside the box, the floored observation) and its messages are unpacked when first read. In
+float64 with a tol of at least :data:`MIXED_MIN_TOL` it iterates in float32 first
+(:meth:`~crfmap.crf.engine.packed.PackedBlock.widened`): float32 passes run about 1.4x faster, and float64
+iterations from their messages then run until an iteration of every cell moves no message by tol, the same stopping
+rule, so the result is a float64 iteration converged to tol (it differs from a float64-only run by about tol, as two
+runs stopped at tol from different starts do).
 """
 from __future__ import annotations
 
@@ -57,13 +56,12 @@ def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, mes
           fused=False, block=PASS_ITERATIONS, freeze=None, floor=MESSAGE_FLOOR) -> EngineResult:
     """Checkerboard LBP on the fast kernels.
 
-    ``prob``: float64 [y, x] observations; ``tables``: the four directional tables; ``region``:
-    the senders or None (whole grid); ``messages``: a warm start or None; ``states``: the
-    certain cells (:mod:`crfmap.crf.model.evidence`) or None; ``block``, ``freeze``: as in
-    :meth:`crfmap.crf.engine.packed.PackedBlock.run`. With ``fused`` (see
-    :func:`fused_start_applies`; ``states`` not computed yet) ``prob`` is checked here: a bad
-    grid raises :class:`crfmap.errors.InputError`, certain cells take the general path, and the
-    returned ``states`` are the ones found.
+    ``prob``: float64 [y, x] observations; ``tables``: the four directional tables; ``region``: the senders or None
+    (whole grid); ``messages``: a warm start or None; ``states``: the certain cells
+    (:mod:`crfmap.crf.model.evidence`) or None; ``block``, ``freeze``: as in
+    :meth:`crfmap.crf.engine.packed.PackedBlock.run`. With ``fused`` (see :func:`fused_start_applies`; ``states``
+    not computed yet) ``prob`` is checked here: a bad grid raises :class:`crfmap.errors.InputError`, certain cells
+    take the general path, and the returned ``states`` are the ones found.
     """
     shape = prob.shape
     t = [time.perf_counter()]

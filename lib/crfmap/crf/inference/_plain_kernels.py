@@ -3,16 +3,14 @@
 Data layout (checked and prepared by :mod:`crfmap.crf.inference.schedules`):
 
 - ``unary[y, x]``: P(occupied) the observed layer tells each hidden cell, floored.
-- ``msg[d, y, x]``: the message arriving at cell (y, x) that travelled in direction d
-  (0 east-bound, i.e. from the west neighbour; 1 west-bound, from the east; 2 north-bound,
-  from the south; 3 south-bound, from the north), stored as P(receiver occupied).
-  A slot with no neighbour behind it stays 0.5 for ever (a uniform message).
+- ``msg[d, y, x]``: the message arriving at cell (y, x) that travelled in direction d (0 east-bound, i.e. from the
+  west neighbour; 1 west-bound, from the east; 2 north-bound, from the south; 3 south-bound, from the north), stored
+  as P(receiver occupied). A slot with no neighbour behind it stays 0.5 for ever (a uniform message).
 - ``coef[d]``: (oo, oe, oo + eo, oe + ee) of the table used by messages travelling in d.
 - ``active[y, x]``: cells allowed to send (bounded LBP); ``use_active`` False ignores it.
 
-A binary message is one number, so one update is one division:
-``m = (oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)`` with A, B the sender's cavity weights.
-Every kernel returns the largest change of any message it wrote.
+A binary message is one number, so one update is one division: ``m = (oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)``
+with A, B the sender's cavity weights. Every kernel returns the largest change of any message it wrote.
 """
 from __future__ import annotations
 

@@ -1,21 +1,19 @@
 """Loopy belief propagation on an occupancy grid's CRF (thesis sec. 2.6, 3.3, 3.4): :func:`infer`.
 
-The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one
-observed node per cell holding the grid's P(occupied), which sends its hidden node one message
-through ``link``. :func:`infer` checks its input, finds the hard evidence
-(:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on the
-schedule asked for (:mod:`crfmap.crf.inference.schedules`) and returns the beliefs P(occupied)
-as a grid plus the convergence diagnostics (:class:`~crfmap.crf.inference.result.LBPResult`).
+The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one observed node per cell
+holding the grid's P(occupied), which sends its hidden node one message through ``link``. :func:`infer` checks its
+input, finds the hard evidence (:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on
+the schedule asked for (:mod:`crfmap.crf.inference.schedules`) and returns the beliefs P(occupied) as a grid plus
+the convergence diagnostics (:class:`~crfmap.crf.inference.result.LBPResult`).
 
-Kernels: the checkerboard schedule (without damping) runs on the fast engine of
-:mod:`crfmap.crf.engine` (:func:`crfmap.crf.engine.solve.solve`): messages as odds ratios in
-red/black planes, float32 SIMD, several iterations per trip through memory. It gives the plain
-kernel's iterations (to rounding) but measures the largest message change only on the last
-iteration of each pass of up to ``block`` iterations (passes grow 1, 2, 4, ... so a warm start
-still stops at once); the other entries of ``max_change`` are NaN, and a run may do up to
-``block - 1`` iterations more than the plain kernel before it sees ``tol``. On large grids,
-settled tiles pause (``Checkerboard(freeze=...)``). The other schedules, and
-``Checkerboard(kernel="plain")``, run the plain kernels of :mod:`crfmap.crf.inference._plain_kernels`.
+Kernels: the checkerboard schedule (without damping) runs on the fast engine of :mod:`crfmap.crf.engine`
+(:func:`crfmap.crf.engine.solve.solve`): messages as odds ratios in red/black planes, float32 SIMD, several
+iterations per trip through memory. It gives the plain kernel's iterations (to rounding) but measures the largest
+message change only on the last iteration of each pass of up to ``block`` iterations (passes grow 1, 2, 4, ... so a
+warm start still stops at once); the other entries of ``max_change`` are NaN, and a run may do up to ``block - 1``
+iterations more than the plain kernel before it sees ``tol``. On large grids, settled tiles pause
+(``Checkerboard(freeze=...)``). The other schedules, and ``Checkerboard(kernel="plain")``, run the plain kernels of
+:mod:`crfmap.crf.inference._plain_kernels`.
 
 Bounded LBP (sec. 3.4.4): pass ``region`` (a boolean [y, x] mask, e.g. from
 :func:`crfmap.crf.inference.regions.disc_region`): only cells in it send messages; every other
@@ -124,45 +122,28 @@ def infer(
     threads: int | None = None,
     init: str = "uniform",
 ) -> LBPResult:
-    """Run loopy belief propagation on a grid's CRF.
+    """Run loopy belief propagation on a grid's CRF; returns an :class:`LBPResult`.
 
-    Parameters
-    ----------
-    grid : OccupancyGrid or 2-D array of P(occupied) in [0, 1], indexed [y, x]
-    hidden, link : 2x2 tables (rows C1 C0, columns N1 N0); see :mod:`crfmap.crf.model.potentials`
-    schedule : "checkerboard", "flooding", "sweep", "thesis", or their settings
-        (:class:`~crfmap.crf.inference.schedules.Checkerboard` ``(kernel, damping, block, freeze)``,
-        ``Flooding(damping)``, ``Sweep(damping)``, ``Thesis(start, damping)``): options that
-        apply to one schedule only live in its settings.
-    max_iter : int
-        Stop after this many iterations (the thesis used 2 with ``schedule="thesis"``).
-    tol : float
-        Stop once the largest message change of an iteration is below ``tol``.
-    region : boolean [y, x] mask or None
-        Bounded LBP: only these cells send messages.
-    messages : (4, H, W) array or None
-        Warm start (e.g. ``previous_result.messages``); uniform when None.
-    pairing : "receiver" (thesis) or "oriented" (proper pairwise CRF for non-symmetric tables)
-    dtype : np.float64 or np.float32
-        Bounded LBP from uniform messages in float64 with ``tol`` >= 1e-6 (every preset's call) iterates in
-        float32 until tol, then in float64 until an iteration moves no message by tol
-        (:mod:`crfmap.crf.engine.solve`): a float64 result, about 1.4x faster.
-    threads : int or None
-        Numba threads for the parallel schedules (None: numba's default).
-    init : "uniform" or "coarse"
-        Start messages when ``messages`` is None: uniform, or coarse-to-fine
-        (:mod:`crfmap.crf.inference.multiscale`: the grid halved recursively, each level solved
-        with these arguments and its messages upsampled as the next level's warm start). Same
-        fixed point where LBP has one; in the ordered phase it may reach another. ``seconds``
-        includes the coarse levels (also ``timings["coarse"]``); ``iterations`` counts the
-        full grid's only.
+    ``grid``: an OccupancyGrid or a 2-D array of P(occupied) in [0, 1], indexed [y, x]. ``hidden``, ``link``: 2x2
+    tables (rows C1 C0, columns N1 N0; :mod:`crfmap.crf.model.potentials`). ``schedule``: ``"checkerboard"``,
+    ``"flooding"``, ``"sweep"``, ``"thesis"``, or their settings (:class:`~crfmap.crf.inference.schedules.Checkerboard`
+    ``(kernel, damping, block, freeze)``, ``Flooding(damping)``, ``Sweep(damping)``, ``Thesis(start, damping)``):
+    options that apply to one schedule only live in its settings. Iterations stop after ``max_iter`` (the thesis used 2
+    with ``schedule="thesis"``) or once the largest message change of an iteration is below ``tol``. ``region``: a
+    boolean [y, x] mask of the cells that send messages (bounded LBP). ``messages``: a (4, H, W) warm start (e.g.
+    ``previous_result.messages``). ``pairing``: ``"receiver"`` (thesis) or ``"oriented"`` (a proper pairwise CRF for
+    non-symmetric tables). ``threads``: numba threads for the parallel schedules (None: numba's default).
 
-    Returns
-    -------
-    LBPResult
+    ``dtype`` np.float64 or np.float32: bounded LBP from uniform messages in float64 with ``tol`` >= 1e-6 (every
+    preset's call) iterates in float32 until tol, then in float64 until an iteration moves no message by tol
+    (:mod:`crfmap.crf.engine.solve`): a float64 result, about 1.4x faster.
 
-    Examples
-    --------
+    ``init``: the start messages when ``messages`` is None: ``"uniform"``, or ``"coarse"``-to-fine
+    (:mod:`crfmap.crf.inference.multiscale`: the grid halved recursively, each level solved with these arguments and
+    its messages upsampled as the next level's warm start). Same fixed point where LBP has one; in the ordered phase
+    it may reach another. ``seconds`` includes the coarse levels (also ``timings["coarse"]``); ``iterations`` counts
+    the full grid's only.
+
     >>> r = infer(np.array([[0.9, 0.5, 0.9]]), max_iter=50, tol=1e-9)
     >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
     (True, True)

@@ -1,21 +1,19 @@
 """Coarse-to-fine start for LBP: solve a 2x downsampled grid, upsample its messages as the warm start.
 
-``infer(grid, init="coarse")`` (:func:`crfmap.crf.inference.lbp.infer`) halves the grid (the log-odds of
-P(occupied) of each 2x2 block summed: the block's evidence as one cell's) recursively down to
-about :data:`COARSE_MIN_SIDE` cells a side, runs LBP there from uniform messages, and hands
-every finer level the coarser level's converged messages, each fine cell taking the message its
-coarse cell received from the same direction.
+``infer(grid, init="coarse")`` (:func:`crfmap.crf.inference.lbp.infer`) halves the grid (the log-odds of P(occupied)
+of each 2x2 block summed: the block's evidence as one cell's) recursively down to about :data:`COARSE_MIN_SIDE`
+cells a side, runs LBP there from uniform messages, and hands every finer level the coarser level's converged
+messages, each fine cell taking the message its coarse cell received from the same direction.
 
 What it is and is not (measured in ``tests/crf/test_multiscale.py``, the ``converge-start`` row of
 ``crfmap bench`` and notebook 09; the numbers live there):
 
 - Where LBP has a single fixed point (weak couplings such as [[2, 1], [1, 2]] or the certainty
   preset's J = 0.35), the start changes only the path: the beliefs equal the uniform start's.
-- In the ordered phase ([[10, 1], [1, 10]]) LBP has several fixed points and the start picks
-  one: on the noisy office floor the coarse start reaches one with nearly all cells on the same
-  side of 0.5 as the uniform start's, in fewer fine iterations, but the coarse levels cost more
-  than they save. The mean of P as the coarse observation (tried first) reaches the all-empty
-  fixed point (the walls gone), so it is not used.
+- In the ordered phase ([[10, 1], [1, 10]]) LBP has several fixed points and the start picks one: on the noisy
+  office floor the coarse start reaches one with nearly all cells on the same side of 0.5 as the uniform start's, in
+  fewer fine iterations, but the coarse levels cost more than they save. The mean of P as the coarse observation
+  (tried first) reaches the all-empty fixed point (the walls gone), so it is not used.
 
 >>> import numpy as np
 >>> downsample(np.array([[0.0, 1.0, 0.9], [1.0, 0.0, 0.5]])).round(3).tolist()

@@ -13,33 +13,22 @@ from crfmap.grid import OccupancyGrid
 class LBPResult:
     """What :func:`infer` returns.
 
-    Attributes
-    ----------
-    beliefs : OccupancyGrid
-        P(occupied) of every hidden cell, with the input grid's metadata.
-    iterations : int
-        Iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
-    max_change : ndarray
-        The largest message change at every iteration (length ``iterations``); NaN where the
-        fast kernel did not measure it (it measures the last iteration of each block).
-    converged : bool
-        Whether the last change fell below ``tol``.
-    messages : ndarray
-        The final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start.
-        The whole-grid fast kernel unpacks them on first read (most callers never do).
-    seconds : float
-        Wall time of the inference, without the time numba spent compiling kernels or loading them
-        from its disk cache (a first call's wait: ``timings["compile"]``).
-    kernel : str
-        "fast" or "plain": which kernels ran.
-    timings : dict
-        Seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and
-        messages ("unpack") on the whole-grid fast kernel, and on the coarse levels of
-        ``init="coarse"`` ("coarse"); "compile": seconds numba spent compiling or loading kernels
-        during the call (not in ``seconds``; absent when none); "pack" and "iterate" include it.
-    gated : OccupancyGrid or None
-        A preset's beliefs moved by its evidence gate into the nav2 class each cell's own evidence allows
-        (:meth:`crfmap.crf.model.gating.EvidenceGate.decide`); None when no gate ran. Read it as :attr:`nav2_map`.
+    - ``beliefs``: P(occupied) of every hidden cell, with the input grid's metadata.
+    - ``iterations``: iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
+    - ``max_change``: the largest message change at every iteration (length ``iterations``); NaN where the fast kernel
+      did not measure it (it measures the last iteration of each block).
+    - ``converged``: whether the last change fell below ``tol``.
+    - ``messages``: the final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start. The whole-grid
+      fast kernel unpacks them on first read (most callers never do).
+    - ``seconds``: wall time of the inference, without the time numba spent compiling kernels or loading them from
+      its disk cache (a first call's wait: ``timings["compile"]``).
+    - ``kernel``: ``"fast"`` or ``"plain"``: which kernels ran.
+    - ``timings``: seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and messages ("unpack")
+      on the whole-grid fast kernel, and on the coarse levels of ``init="coarse"`` ("coarse"); "compile": seconds
+      numba spent compiling or loading kernels during the call (not in ``seconds``; absent when none); "pack" and
+      "iterate" include it.
+    - ``gated``: a preset's beliefs moved by its evidence gate into the nav2 class each cell's own evidence allows
+      (:meth:`crfmap.crf.model.gating.EvidenceGate.decide`); None when no gate ran. Read it as :attr:`nav2_map`.
     """
 
     beliefs: OccupancyGrid

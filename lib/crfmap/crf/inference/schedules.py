@@ -7,8 +7,7 @@ Pass one as ``infer(grid, schedule=...)``: a name (its settings' defaults) or a 
   engine (:mod:`crfmap.crf.engine`) unless ``kernel="plain"`` or ``damping`` asks for the plain one.
 - :class:`Flooding` (``"flooding"``): every message from the previous iteration's messages
   (synchronous). Can oscillate on strong couplings; ``damping`` tames it.
-- :class:`Sweep` (``"sweep"``): four directional sweeps (thesis sec. 2.6.2): information
-  crosses the grid per sweep.
+- :class:`Sweep` (``"sweep"``): four directional sweeps (thesis sec. 2.6.2): information crosses the grid per sweep.
 - :class:`Thesis` (``"thesis"``): breadth-first from a corner cell, each visited cell pulling
   fresh messages from its neighbours, in place (Listing 5); every iteration restarts from the
   last cell visited (sec. 2.6.2). ``max_iter=2`` is the thesis's setting. One thread.
@@ -218,8 +217,7 @@ PLAIN_RUNNERS = {
 def run_schedule(settings, probability, tables, link, max_iter, tol, senders, messages, dtype, floor, clamped):
     """A plain schedule from start to end; returns (beliefs, messages, changes).
 
-    ``senders``: the cells that send or None (all); ``clamped``: (certain states or None, the
-    region or None).
+    ``senders``: the cells that send or None (all); ``clamped``: (certain states or None, the region or None).
     """
     shape = probability.shape
     unary = np.clip(link_unary(probability, link), floor, 1.0 - floor).astype(dtype)

@@ -1,19 +1,17 @@
 """Hard evidence: the cells whose state is certain, the messages they send, and contradictions.
 
-An observed cell with P(occupied) exactly 0 or 1 makes its hidden cell certain when the link
-table gives the other hidden state zero weight (identity link: P in {0, 1}). A link with no
-zero entry never makes a cell certain, nor does a P strictly inside (0, 1) (no row of a table
-is all zero). A certain cell's exact marginal is 0 or 1 whatever its neighbours are, so
-:func:`crfmap.crf.inference.lbp.infer` *clamps* it: its belief is exactly its state and it sends, every
-iteration, the message that state implies (the table's column for it, normalised). It is
-never updated, so no floor on its observation lets neighbours overturn it.
+An observed cell with P(occupied) exactly 0 or 1 makes its hidden cell certain when the link table gives the other
+hidden state zero weight (identity link: P in {0, 1}). A link with no zero entry never makes a cell certain, nor
+does a P strictly inside (0, 1) (no row of a table is all zero). A certain cell's exact marginal is 0 or 1 whatever
+its neighbours are, so :func:`crfmap.crf.inference.lbp.infer` *clamps* it: its belief is exactly its state and it
+sends, every iteration, the message that state implies (the table's column for it, normalised). It is never updated,
+so no floor on its observation lets neighbours overturn it.
 
-A hidden table with a zero entry carries certainty on: if column ``t[:, s]`` has one zero, the
-neighbour of a cell certain in state ``s`` is certain too (unit propagation; exact, as every
-joint state of positive weight agrees). Certainties that disagree, or a certain state whose
-column is all zero, leave no joint state of positive weight: :class:`InputError` naming the cell.
-A state whose column is all zero towards an existing neighbour is impossible (the cell is then
-certain of the other). On a chain this is arc consistency, which finds every certain cell and
+A hidden table with a zero entry carries certainty on: if column ``t[:, s]`` has one zero, the neighbour of a cell
+certain in state ``s`` is certain too (unit propagation; exact, as every joint state of positive weight agrees).
+Certainties that disagree, or a certain state whose column is all zero, leave no joint state of positive weight:
+:class:`InputError` naming the cell. A state whose column is all zero towards an existing neighbour is impossible
+(the cell is then certain of the other). On a chain this is arc consistency, which finds every certain cell and
 every contradiction; on a loopy grid it may miss some (then the floors keep LBP finite).
 
 >>> import numpy as np

@@ -11,9 +11,8 @@ Layout (thesis Tables 4, 5, 7): rows are the state of the cell C that a message 
 - ``link``: observation-cell potential (default identity [[1, 0], [0, 1]]); the observed node
   holds the grid's P(occupied) and sends one message through it.
 
-A table matters only up to scale: [[10, 1], [1, 10]] and [[0.9, 0.1], [0.1, 0.9]]-style tables
-differ in strength (ratio 10 vs 9), not in kind. Any finite non-negative table with no
-all-zero row is accepted.
+A table matters only up to scale: [[10, 1], [1, 10]] and [[0.9, 0.1], [0.1, 0.9]]-style tables differ in strength
+(ratio 10 vs 9), not in kind. Any finite non-negative table with no all-zero row is accepted.
 
 Pairing (how a hidden table applies to an undirected lattice edge):
 
@@ -21,9 +20,8 @@ Pairing (how a hidden table applies to an undirected lattice edge):
   For a symmetric table this is exactly sum-product on the pairwise CRF with edge potential
   ``hidden``; for a non-symmetric one (such as the thesis's learned tables) it is the thesis's
   directed-influence model, which has no joint distribution to compare against.
-- ``"oriented"``: a proper pairwise CRF whose edge potential is ``psi(x_a, x_b) = hidden[x_a, x_b]``
-  with ``a`` the west (lower x) or south (lower y) cell of the edge. Same as ``"receiver"`` for
-  symmetric tables.
+- ``"oriented"``: a proper pairwise CRF whose edge potential is ``psi(x_a, x_b) = hidden[x_a, x_b]`` with ``a`` the
+  west (lower x) or south (lower y) cell of the edge. Same as ``"receiver"`` for symmetric tables.
 """
 from __future__ import annotations
 

@@ -2,9 +2,19 @@
 import numpy as np
 import pytest
 
-from crfmap.assess import splits
 from crfmap.assess.scansplit import scan_split, score
 from crfmap.errors import InputError
+from crfstudy import splits
+
+from box_scans import scans_in_a_box
+
+
+@pytest.fixture
+def corridor():
+    """A laser walking along a 3 m x 1 m corridor: 12 scans of 60 beams."""
+    n_scans = 12
+    poses = np.column_stack([np.linspace(0.3, 2.7, n_scans), np.full(n_scans, 0.5), np.zeros(n_scans)])
+    return scans_in_a_box(poses, (0.05, 0.05, 2.95, 0.95), 60)
 
 
 def test_split_by_alternate_scans_is_scan_split(corridor):

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from crfmap.assess.paired import paired_difference, sign_test, value_range
 from crfmap.errors import InputError
+from crfstudy.paired import paired_difference, sign_test, value_range
 
 
 @pytest.mark.parametrize("wins,losses", [(0, 0), (5, 0), (3, 3), (12, 4), (1, 9), (20, 0)])
