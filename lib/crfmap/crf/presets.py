@@ -24,7 +24,7 @@ otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask 
   0.441 is the exact model's), followed by an evidence gate (:mod:`crfmap.crf.model.gating`) that lets nav2 read a
   cell free only where its own beams passed it at least three times net (a subset of the cells the raw grid calls free),
   keeps repeatedly hit and on-a-wall cells lethal, lets lone hits (ghosts) go, keeps walls from growing into space
-  no beam reached, and gives never-observed cells the building's rate P = 0.3 (still unknown to nav2). Chosen for
+  no beam reached, and gives never-observed cells the building's rate P = 0.15 (still unknown to nav2). Chosen for
   what a robot does with the map (issue 38: dangerous misses, ghosts, wall thickness, AMCL localisation), where
   ``certainty`` opens walls and triples their thickness. Its result has two faces: ``beliefs``, the probabilities
   (LBP and the never-observed prior: what a ``.npy`` holds and Brier / calibration score), and ``nav2_map``, those
@@ -333,10 +333,11 @@ PRESETS = {
         "below critical, LBP only near observations: improves real maps, keeps walls, leaves unexplored space unknown",
         coupling_table(0.35), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5),
     # Chosen for navigation (issue 38) on Intel and ACES only, confirmed on the two ROS bags, MIT CSAIL and Freiburg
-    # 101: the certainty model, J and pi fitted by held-out log-loss with occupied cells weighted 3x (dangerous
-    # misses the costlier error) over the scan, temporal and block splits of Intel and ACES on the grid
-    # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.2 .. 0.5}, scoring the beliefs (the prior, not the gate's decision):
-    # J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it converges 2.4x faster than at it), pi = 0.3.
+    # 101: the certainty model, over the scan, temporal and block splits of Intel and ACES on the grid
+    # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.1 .. 0.5}, scoring the beliefs (the prior, not the gate's decision):
+    # J by held-out log-loss with occupied cells weighted 3x (J shapes the map nav2 reads; dangerous misses are the
+    # costlier error), J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it converges 2.4x faster than at
+    # it); pi at that J by held-out Brier (pi changes no decision, only never-observed probabilities), pi = 0.15.
     # The gate's free_evidence = 3 was read off the measured trade-off curves (notebook 12;
     # `python -m crfstudy.analysis.tradeoff --closed-loop`): on Intel and ACES it halves the raw grid's dangerous
     # misses where 2 (the least that never frees a cell the raw grid does not call free) cut a fifth to a quarter,
@@ -348,9 +349,9 @@ PRESETS = {
         "gated", "recommended for navigation: the certainty model at J = 0.30 (below LBP's Bethe point), gated by "
         "each cell's own evidence: free only after three net passes (never a cell the raw grid does not call free), "
         "repeated or on-a-wall hits stay lethal, lone hits go, walls do not grow into unobserved space, "
-        "never-observed cells at P = 0.3 (still unknown to nav2)",
+        "never-observed cells at P = 0.15 (still unknown to nav2)",
         coupling_table(0.30), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5,
-        gate=EvidenceGate(free_evidence=3, lethal_evidence=2, line_hits=True, wall_lines=True, unobserved_prior=0.3)),
+        gate=EvidenceGate(free_evidence=3, lethal_evidence=2, line_hits=True, wall_lines=True, unobserved_prior=0.15)),
 }
 
 

@@ -3,9 +3,12 @@
 The gated preset (:mod:`crfmap.crf.presets`) is the certainty model at coupling J followed by an evidence gate
 (:mod:`crfmap.crf.model.gating`) whose ``unobserved_prior`` pi gives never-observed cells the building's rate. Both
 were chosen on the two choosing recordings only (Intel and ACES), over three splits each (the even/odd scan split,
-temporal halves, blocks of 50 scans: :mod:`crfstudy.splits`), by the held-out log-loss with occupied cells
-weighted 3x (a dangerous miss, a wall called free, is the costlier error for a planner), on the grid
-J in :data:`COUPLINGS` x pi in :data:`PRIORS`. The certainty model's other constants stay as the certainty
+temporal halves, blocks of 50 scans: :mod:`crfstudy.splits`), on the grid J in :data:`COUPLINGS` x pi in
+:data:`PRIORS`, each by the score of what it shapes (:func:`best`). J shapes the map nav2 reads (LBP's beliefs, then
+the gate's decision from them): it is chosen by the held-out log-loss with occupied cells weighted 3x (a dangerous
+miss, a wall called free, is the costlier error for a planner). pi moves only never-observed cells off wall lines,
+which the gate always reads unknown, so it changes no decision: it is chosen, at that J, by the held-out Brier score,
+the probabilities' own score (a cost weight there would only bias the probability). The certainty model's other constants stay as the certainty
 preset's search chose them (:mod:`crfstudy.analysis.preset_search`). The cached result
 (``gate_search_intel_aces.json``) holds every grid point's scores; ``python -m crfstudy.analysis.gate_search`` reruns
 the search (about a minute: 4 couplings x 6 splits of LBP, then the gate per prior) and ``--check`` compares it with
@@ -32,7 +35,7 @@ RECORDINGS = {"intel": "carmen/intel-corrected.log.gz", "aces": "carmen/aces-cor
 RESOLUTION = 0.05  # [m]
 SCAN_BLOCK = 50  # scans per block of the block split
 COUPLINGS = (0.25, 0.30, 0.33, 0.35)  # J: the certainty preset's 0.35 (on the Bethe point atanh(1/3)) and below
-PRIORS = (0.2, 0.25, 0.3, 0.35, 0.4, 0.5)  # pi: 0.5 is no prior
+PRIORS = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5)  # pi: 0.5 is no prior
 OCCUPIED_WEIGHT = 3.0  # a held-out occupied cell's weight in the log-loss (misses the costlier error)
 LOG_FLOOR = 1e-6
 CACHE = Path(__file__).with_name("gate_search_intel_aces.json")
@@ -93,8 +96,16 @@ def search(splits, couplings=COUPLINGS, priors=PRIORS, gate=None) -> list:
 
 
 def best(rows) -> dict:
-    """The grid point the rule chooses: the lowest mean weighted log-loss."""
-    return min(rows, key=lambda r: r["weighted_logloss"])
+    """The grid point the rules choose: J of the lowest mean weighted log-loss, then at that J the pi of the lowest
+    mean Brier score (see the module doc).
+
+    >>> best([{"J": 0.3, "pi": 0.2, "weighted_logloss": 0.2, "brier": 0.03},
+    ...       {"J": 0.3, "pi": 0.3, "weighted_logloss": 0.1, "brier": 0.04},
+    ...       {"J": 0.35, "pi": 0.3, "weighted_logloss": 0.3, "brier": 0.01}])["pi"]
+    0.2
+    """
+    coupling = min(rows, key=lambda r: r["weighted_logloss"])["J"]
+    return min((r for r in rows if r["J"] == coupling), key=lambda r: r["brier"])
 
 
 def load_cached(path=CACHE) -> dict:
@@ -116,9 +127,10 @@ def main(argv=None) -> int:
         return 0 if same else 1
 
     with atomic_path(CACHE) as tmp:  # a search interrupted or a full disk leaves the old cache whole
-        Path(tmp).write_text(json.dumps({"rule": "lowest mean held-out log-loss, occupied cells weighted "
-                                                 f"{OCCUPIED_WEIGHT:g}x, over {sorted(RECORDINGS)} x (scan, temporal, "
-                                                 "blocks)", "best": {"J": chosen["J"], "pi": chosen["pi"]},
+        Path(tmp).write_text(json.dumps({"rule": "J: lowest mean held-out log-loss, occupied cells weighted "
+                                                 f"{OCCUPIED_WEIGHT:g}x; pi at that J: lowest mean held-out Brier; over "
+                                                 f"{sorted(RECORDINGS)} x (scan, temporal, blocks)",
+                                         "best": {"J": chosen["J"], "pi": chosen["pi"]},
                                          "rows": rows}, indent=1) + "\n")
     print(f"written {CACHE}")
     return 0

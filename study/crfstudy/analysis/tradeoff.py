@@ -1,10 +1,12 @@
 """The default's trade-off curves (issue 38): what one setting of the gated preset buys on one goal and costs on another.
 
 Issue 38 asks, where a goal cannot be met without losing another, for the measured trade-off as one setting moves.
-Three settings move here (:data:`SETTINGS`), one at a time, every other constant the default's:
+Four settings move here (:data:`SETTINGS`), one at a time, every other constant the default's:
 
 - the coupling J (:data:`COUPLINGS`, the gate search's grid): a stronger coupling calibrates the beliefs better
   (ECE, goal 1b) but lets LBP call more lone returns lethal (ghosts, goal 3);
+- the never-observed prior pi (:data:`PRIORS`): the probability of a cell no beam reached (off wall lines). It moves
+  no decision (the gate reads such cells unknown), only calibration (goals 1a-1c);
 - the gate's ``free_evidence`` (:data:`FREE_EVIDENCE`): the net passes a cell needs before nav2 may read it free.
   Fewer passes free more cells (faster exploration, goal 7a) and open more held-out walls (dangerous misses, goal 2);
 - the gate's ``lethal_evidence`` (:data:`LETHAL_EVIDENCE`): the net hits that keep a cell lethal whatever its
@@ -31,6 +33,7 @@ from crfmap.crf.presets import DEFAULT_PRESET, coupling_table, get_preset
 from crfstudy.experiments.goal_rules import OLD_DEFAULT, better, no_worse
 
 COUPLINGS = (0.25, 0.30, 0.33, 0.35)  # J: the gate search's grid (0.35: the certainty preset's, on the Bethe point)
+PRIORS = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35)  # P of a never-observed cell off every wall line (the gate search's grid, 0.5 left out)
 LETHAL_EVIDENCE = (1, 2, 3)  # net hits that keep a cell lethal (2: the default; 1: every net hit, no ghost removal)
 FREE_EVIDENCE = (1, 2, 3, 4)  # net passes before a cell may read free (2: the default; 1: what the raw grid needs at 0.196)
 # (goal, measure, group, lower is better, rule): the sub-goals a setting moves, as the goal table decides them
@@ -49,10 +52,12 @@ def variants(setting: str) -> dict:
     base = get_preset(DEFAULT_PRESET)
     if setting == "J":
         return {f"J {j:.2f}": replace(base, hidden=coupling_table(j)) for j in COUPLINGS}
+    if setting == "unobserved_prior":
+        return {f"unobserved_prior {p:g}": replace(base, gate=replace(base.gate, unobserved_prior=p)) for p in PRIORS}
     if setting in ("free_evidence", "lethal_evidence"):
         grid = FREE_EVIDENCE if setting == "free_evidence" else LETHAL_EVIDENCE
         return {f"{setting} {n}": replace(base, gate=replace(base.gate, **{setting: n})) for n in grid}
-    raise ValueError(f"setting must be 'J', 'free_evidence' or 'lethal_evidence', got {setting!r}")
+    raise ValueError(f"setting must be one of {', '.join(SETTINGS)}, got {setting!r}")
 
 
 def score_variants(split, presets: dict, n_boot: int = 200, block: int = 16, seed: int = 0) -> dict:
@@ -114,7 +119,7 @@ def tradeoff_table(scores: dict) -> tuple:
     return header, rows
 
 
-SETTINGS = ("J", "free_evidence", "lethal_evidence")  # what variants() moves, one at a time
+SETTINGS = ("J", "unobserved_prior", "free_evidence", "lethal_evidence")  # what variants() moves, one at a time
 CLOSED_LOOP_KINDS = ("online-crf", "refined-on-arrival")  # the onboard maps that run the default preset
 
 

@@ -72,4 +72,7 @@ def test_lethal_evidence_variants_move_only_that_field():
     got = tradeoff.variants("lethal_evidence")
     assert [p.gate.lethal_evidence for p in got.values()] == list(tradeoff.LETHAL_EVIDENCE)
     assert all(p.gate.free_evidence == default.gate.free_evidence for p in got.values())
-    assert set(tradeoff.SETTINGS) == {"J", "free_evidence", "lethal_evidence"}
+    assert set(tradeoff.SETTINGS) == {"J", "unobserved_prior", "free_evidence", "lethal_evidence"}
+    priors = tradeoff.variants("unobserved_prior")
+    assert [p.gate.unobserved_prior for p in priors.values()] == list(tradeoff.PRIORS)
+    assert default.gate.unobserved_prior in tradeoff.PRIORS
