@@ -10,7 +10,8 @@ from crfmap.io.grid_files import load_grid, save_grid
 from crfmap.grid import OccupancyGrid
 from crfmap.crf.inference.lbp import infer
 from crfmap.data import data_file, have_data
-from crfmap.crf.presets import DEFAULT_PRESET
+from crfmap.crf.presets import DEFAULT_PRESET, get_preset
+from crfmap.io.map_server import load_map
 
 OLIN = "rosbags/olin_comprobo24_turtlebot4/mac_1st_floor_final.yaml"
 
@@ -53,8 +54,13 @@ def test_infer_margin_keeps_far_unknown_cells(tmp_path):
     save_grid(OccupancyGrid(p), tmp_path / "in.npy")
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.npy"), "--margin", "3"]) == 0
     out = load_grid(tmp_path / "out.npy").probability
-    # never observed, near or far: the gated default gives the building's rate (0.25), which nav2 reads unknown
-    assert np.all((out[:, 12:] >= 0.21) & (out[:, 12:] <= 0.64)) and 0.21 <= out[10, 7] <= 0.64
+    # never observed, near or far: the default's beliefs give them the building's rate (its prior) ...
+    prior = get_preset().gate.unobserved_prior
+    np.testing.assert_allclose(out[:, 12:], prior, rtol=1e-9)
+    # ... and its map for nav2 reads them unknown (-1), near the observed block or far from it
+    assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "out.yaml"), "--margin", "3"]) == 0
+    seen_by_nav2 = load_map(tmp_path / "out.yaml").to_int8()
+    assert np.all(seen_by_nav2[:, 12:] == -1) and seen_by_nav2[10, 7] == -1
     assert main(["infer", str(tmp_path / "in.npy"), str(tmp_path / "c.npy"), "--margin", "3", "--preset",
                  "certainty"]) == 0
     certainty = load_grid(tmp_path / "c.npy").probability
