@@ -278,7 +278,7 @@ class Preset:
         further limits the cells that send messages, as ``infer``'s ``region``. ``options`` go to
         :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...). With an evidence
         gate, the beliefs take its never-observed prior (:meth:`EvidenceGate.calibrate`: the probabilities)
-        and ``result.nav2_map`` is the map for nav2 (:meth:`EvidenceGate.decide`: the decision).
+        and ``result.nav2_map`` is the map for nav2 (:meth:`EvidenceGate.beliefs_and_map`: the decision).
 
         >>> r = get_preset("certainty").refine(np.array([[0.5, 0.9, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]]))
         >>> r.converged, float(r.beliefs.probability[0, -1])
@@ -309,19 +309,30 @@ class Preset:
             np.copyto(result.beliefs.probability, unary, where=~own)  # the result's own array: checked, in [0, 1]
         # after LBP and the margin: the gate reads each cell's own evidence, everywhere (a never-observed cell beyond the
         # margin too gets the building's rate: still unknown to nav2, and a calibrated probability in a .npy)
+        if self.gate is None and self.temperature == 1.0:  # LBP's beliefs are the result
+            return result
+        beliefs, decided = self.finish(result.beliefs.probability, hits=hits, passes=passes,
+                                       evidence_grid=g.probability, observed=observed)
         dtype = result.beliefs.probability.dtype
-        if self.gate is not None:
-            cells = dict(hits=hits, passes=passes) if hits is not None else dict(
-                evidence=evidence_from_probability(g.probability), observed=observed)
-            calibrated = self.gate.calibrate(result.beliefs.probability, **cells)
-            result.beliefs = result.beliefs.with_probability(calibrated.astype(dtype))
-        if self.temperature != 1.0:  # the whole output, observation-only cells too
-            probability = temper(result.beliefs.probability, self.temperature)
-            result.beliefs = result.beliefs.with_probability(probability.astype(dtype))
-        if self.gate is not None:  # the decision nav2 reads, from the beliefs as reported
-            result.gated = result.beliefs.with_probability(
-                self.gate.decide(result.beliefs.probability, **cells).astype(dtype))
+        result.beliefs = result.beliefs.with_probability(beliefs.astype(dtype))
+        if decided is not None:
+            result.gated = result.beliefs.with_probability(decided.astype(dtype))
         return result
+
+    def finish(self, probability, hits=None, passes=None, evidence_grid=None, observed=None) -> tuple:
+        """(beliefs, map for nav2 or None) of LBP's ``probability``: the gate's prior, the temperature (the whole map,
+        observation-only cells too), then the gate's decision from those beliefs (None without a gate).
+
+        Each cell's evidence comes from its counts (``hits``, ``passes``) or, for a map file, is read back from its P
+        (``evidence_grid``, with the ``observed`` mask). :meth:`refine` and the online mapper end through here.
+        """
+        tempered = None if self.temperature == 1.0 else (lambda p: temper(p, self.temperature))
+        if self.gate is None:
+            p = np.asarray(probability, dtype=np.float64)
+            return (p if tempered is None else tempered(p)), None
+        cells = dict(hits=hits, passes=passes) if hits is not None else dict(
+            evidence=evidence_from_probability(evidence_grid), observed=observed)
+        return self.gate.beliefs_and_map(probability, **cells, transform=tempered)
 
 
 PRESETS = {

@@ -36,7 +36,7 @@ from crfmap.crf.engine.incremental import IncrementalLBP
 from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.inference.result import LBPResult
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
-from crfmap.crf.presets import DEFAULT_PRESET, Preset, custom_preset, get_preset, temper
+from crfmap.crf.presets import DEFAULT_PRESET, Preset, custom_preset, get_preset
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 from crfmap.mapping import builder
@@ -207,8 +207,7 @@ class OnlineMapper:
         threads = numba.get_num_threads() if threads is None else int(threads)
         t0 = time.perf_counter()
         changes = np.asarray(self.lbp.run(max_iter, tol, threads), float)
-        beliefs = self.beliefs()
-        gated = None if self.preset.gate is None else self.nav2_map(beliefs)
+        beliefs, gated = self._refined()
         return LBPResult(beliefs=beliefs, iterations=len(changes), max_change=changes,
                          converged=bool(changes.size and changes[-1] < tol), messages=self.messages(),
                          seconds=time.perf_counter() - t0, schedule="checkerboard", kernel="fast", gated=gated)
@@ -239,24 +238,22 @@ class OnlineMapper:
         evidence gate (:mod:`crfmap.crf.model.gating`) gives never-observed cells its prior, and a preset
         temperature other than 1 tempers the whole map, as :meth:`crfmap.crf.presets.Preset.refine` does.
         """
-        probability = np.clip(self.lbp.beliefs(), 0.0, 1.0)
-        region = None if self.margin is None else self.region()
-        if region is not None:  # cells next to a sender receive messages but are outside the refinement
-            probability[~region] = 0.5
-        if self.preset.gate is not None:  # everywhere, as Preset.refine
-            probability = self.preset.gate.calibrate(probability, hits=self.hits.occupied, passes=self.hits.empty)
-        if self.preset.temperature != 1.0:
-            probability = temper(probability, self.preset.temperature)
-        return self._grid(probability, model="crf-online", preset=self.preset.name)
+        return self._refined()[0]
 
-    def nav2_map(self, beliefs: OccupancyGrid | None = None) -> OccupancyGrid:
-        """The map to hand nav2: :meth:`beliefs` (or the given ones) moved by the preset's evidence gate into the class
-        each cell's own counts allow, as ``Preset.refine(...).nav2_map``; the beliefs themselves without a gate."""
-        beliefs = self.beliefs() if beliefs is None else beliefs
-        if self.preset.gate is None:
-            return beliefs
-        decided = self.preset.gate.decide(beliefs.probability, hits=self.hits.occupied, passes=self.hits.empty)
-        return beliefs.with_probability(decided)
+    def nav2_map(self) -> OccupancyGrid:
+        """The map to hand nav2: the beliefs moved by the preset's evidence gate into the class each cell's own counts
+        allow, as ``Preset.refine(...).nav2_map``; the beliefs themselves without a gate."""
+        beliefs, decided = self._refined()
+        return beliefs if decided is None else decided
+
+    def _refined(self) -> tuple:
+        """(beliefs, map for nav2 or None): the preset's ending of a refinement (:meth:`Preset.finish`) on LBP's beliefs."""
+        probability = np.clip(self.lbp.beliefs(), 0.0, 1.0)
+        if self.margin is not None:  # cells next to a sender receive messages but are outside the refinement
+            probability[~self.region()] = 0.5
+        beliefs, decided = self.preset.finish(probability, hits=self.hits.occupied, passes=self.hits.empty)
+        grid = self._grid(beliefs, model="crf-online", preset=self.preset.name)
+        return grid, None if decided is None else grid.with_probability(decided)
 
     def messages(self) -> np.ndarray:
         """The current messages as probabilities, shape (4, H, W) (see :func:`crfmap.crf.inference.lbp.infer`)."""

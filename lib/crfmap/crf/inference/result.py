@@ -28,7 +28,7 @@ class LBPResult:
       numba spent compiling or loading kernels during the call (not in ``seconds``; absent when none); "pack" and
       "iterate" include it.
     - ``gated``: a preset's beliefs moved by its evidence gate into the nav2 class each cell's own evidence allows
-      (:meth:`crfmap.crf.model.gating.EvidenceGate.decide`); None when no gate ran. Read it as :attr:`nav2_map`.
+      (:meth:`crfmap.crf.model.gating.EvidenceGate.beliefs_and_map`); None when no gate ran. Read it as :attr:`nav2_map`.
     """
 
     beliefs: OccupancyGrid

@@ -36,10 +36,10 @@ inside the nearest class the evidence allows:
 The gate has two outputs, because a probability and a decision answer different questions.
 :meth:`EvidenceGate.calibrate` applies the prior only: the refinement's beliefs, the probabilities a user scores or
 fuses (``Preset.refine(...).beliefs``, a ``.npy`` output; Brier and calibration are measured on them).
-:meth:`EvidenceGate.decide` then moves each belief that would cross one of nav2's thresholds just inside the class the
-cell's own evidence allows: the map nav2 reads (``LBPResult.nav2_map``: what every path writes as a map_server map
-and publishes). A belief the gate keeps from crossing is not a better probability (a cell the CRF calls free with
-P = 0.05 on one pass is free 9 times in 10), only a safer decision, so it is kept out of the beliefs.
+:meth:`EvidenceGate.beliefs_and_map` gives the decision too: each belief that would cross one of nav2's thresholds
+moved just inside the class the cell's own evidence allows, the map nav2 reads (``LBPResult.nav2_map``: what every
+path writes as a map_server map and publishes). A belief the gate keeps from crossing is not a better probability,
+only a safer decision, so it is kept out of the beliefs.
 
 >>> gate = EvidenceGate(unobserved_prior=0.25)
 >>> p = np.array([[0.10, 0.10, 0.10, 0.90, 0.30]])
@@ -149,14 +149,26 @@ class EvidenceGate:
             _check_evidence_count(self.lethal_evidence, "lethal_evidence")
 
     def apply(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
-        """The map for nav2, a new float64 [y, x] array: :meth:`calibrate`, then :meth:`decide`.
+        """The map for nav2, a new float64 [y, x] array: the second of :meth:`beliefs_and_map`.
 
         Give the cell counts (``hits``, ``passes``), or the signed ``evidence`` x with an ``observed``
         mask (a map file's P read back by :func:`crfmap.crf.presets.evidence_from_probability`;
         then observed = x != 0 unless given).
         """
+        return self.beliefs_and_map(probability, hits, passes, evidence, observed)[1]
+
+    def beliefs_and_map(self, probability, hits=None, passes=None, evidence=None, observed=None, transform=None):
+        """(beliefs, map for nav2), new float64 [y, x] arrays, each cell's evidence read once: :meth:`calibrate`, then
+        ``transform`` of the beliefs (e.g. a preset's temperature; None: none), then the decision from them: each
+        belief that would cross one of nav2's thresholds moves just inside the class the cell's evidence allows.
+
+        Arguments as :meth:`apply`.
+        """
         cells = self._cells(probability, hits, passes, evidence, observed)
-        return self._decide(self._calibrate(*cells), *cells[1:])
+        beliefs = self._calibrate(*cells)
+        if transform is not None:
+            beliefs = np.asarray(transform(beliefs), dtype=np.float64)
+        return beliefs, self._decide(beliefs, *cells[1:])
 
     def calibrate(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
         """The beliefs with the never-observed prior only (a new float64 [y, x] array): probabilities to score.
@@ -165,15 +177,6 @@ class EvidenceGate:
         class. Arguments as :meth:`apply`.
         """
         return self._calibrate(*self._cells(probability, hits, passes, evidence, observed))
-
-    def decide(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
-        """Calibrated beliefs (:meth:`calibrate`'s) moved into the nav2 class each cell's evidence allows (new array).
-
-        Only beliefs that would cross one of nav2's thresholds move, each just inside the nearest allowed class.
-        Arguments as :meth:`apply`.
-        """
-        cells = self._cells(probability, hits, passes, evidence, observed)
-        return self._decide(*cells)
 
     def _cells(self, probability, hits, passes, evidence, observed):
         """(P as a new float64 array, evidence x, seen mask, observed walls, never-observed cells off wall lines)."""
