@@ -261,20 +261,26 @@ def goal_matrix(columns: dict) -> tuple:
     missed) or ``n/a`` (not scored there).
     """
     header = ["goal"] + list(columns)
-    rows = []
-    for number, what in GOALS.items():
-        row = [f"{number} {what}"]
-        for verdicts in columns.values():
-            mine = [v for v in verdicts if v.goal.rstrip("abcd") == number]
-            statuses = [v.status for v in mine]
-            if not mine or all(s == NOT_SCORED for s in statuses):
-                row.append(NOT_SCORED)
-            elif MISSED in statuses or NOT_SCORED in statuses:
-                row.append("missed: " + ", ".join(v.goal for v in mine if v.status in (MISSED, NOT_SCORED)))
-            else:
-                row.append(MET_INTERVAL if MET_INTERVAL in statuses else MET)
-        rows.append(row)
+    rows = [[f"{number} {what}"] + [_cell({"": _of_goal(verdicts, number)}) for verdicts in columns.values()]
+            for number, what in GOALS.items()]
     return header, rows
+
+
+def _of_goal(verdicts, number):
+    return [v for v in verdicts if v.goal.rstrip("abcd") == number]
+
+
+def _cell(groups: dict) -> str:
+    """One matrix cell from ``{label: [Verdict]}``: ``n/a`` when nothing was scored, ``missed: <label> 1c, ...`` when a
+    sub-goal was missed or not scored (the label names a split; "" for none), else ``met`` or ``met*``."""
+    statuses = [v.status for verdicts in groups.values() for v in verdicts]
+    if not statuses or all(s == NOT_SCORED for s in statuses):
+        return NOT_SCORED
+    missed = [f"{label} {', '.join(bad)}".strip() for label, verdicts in groups.items()
+              if (bad := [v.goal for v in verdicts if v.status in (MISSED, NOT_SCORED)])]
+    if missed:
+        return "missed: " + "; ".join(missed)
+    return MET_INTERVAL if MET_INTERVAL in statuses else MET
 
 
 def harder_verdicts(summary: dict) -> dict:
@@ -288,24 +294,10 @@ def harder_matrix(summaries: dict) -> tuple:
     A cell says ``met`` / ``met*`` on every split, or ``missed: <split> <sub-goals>; ...``.
     """
     by_recording = {name: harder_verdicts(s) for name, s in summaries.items()}
-    header, rows = ["goal (harder splits)"] + list(by_recording), []
-    for number in ("2", "3", "4", "5"):
-        row = [f"{number} {GOALS[number]}"]
-        for splits in by_recording.values():
-            missed, statuses = [], []
-            for kind, verdicts in splits.items():
-                mine = [v for v in verdicts if v.goal.rstrip("abcd") == number]
-                statuses += [v.status for v in mine]
-                bad = [v.goal for v in mine if v.status in (MISSED, NOT_SCORED)]
-                if bad:
-                    missed.append(f"{kind} {', '.join(bad)}")
-            if not statuses:
-                row.append(NOT_SCORED)
-            elif missed:
-                row.append("missed: " + "; ".join(missed))
-            else:
-                row.append(MET_INTERVAL if MET_INTERVAL in statuses else MET)
-        rows.append(row)
+    header = ["goal (harder splits)"] + list(by_recording)
+    rows = [[f"{number} {GOALS[number]}"] + [_cell({kind: _of_goal(verdicts, number) for kind, verdicts in splits.items()})
+                                            for splits in by_recording.values()]
+            for number in ("2", "3", "4", "5")]
     return header, rows
 
 
