@@ -69,10 +69,15 @@ def score_variants(split, presets: dict, n_boot: int = 200, block: int = 16, see
     counts = dict(hits=split.first_hits, passes=split.first_passes)
     old = get_preset(OLD_DEFAULT).refine(**counts).beliefs.probability
     raw = split.raw_probability()
+    lbp = {}  # LBP once per coupling: variants of the gate share it and differ only in how the refinement ends
     out = {}
     for label, preset in presets.items():
-        result = preset.refine(**counts)
-        beliefs, nav_map = result.beliefs.probability, result.nav2_map.probability
+        key = preset.hidden.tobytes()
+        if key not in lbp:
+            lbp[key] = replace(preset, gate=None, temperature=1.0).refine(**counts)
+        result = lbp[key]
+        beliefs, nav_map = preset.finish(result.beliefs.probability, **counts)
+        nav_map = beliefs if nav_map is None else nav_map
         brier = score(split, {OLD_DEFAULT: old, label: beliefs}, n_boot=n_boot, block=block, seed=seed,
                       reference=OLD_DEFAULT, metrics=("brier",))[label]["all"]
         ece = paired_calibration(split, {OLD_DEFAULT: old, label: beliefs}, OLD_DEFAULT, n_boot=n_boot, block=block,
@@ -173,19 +178,20 @@ def closed_loop_table(records, reference="raw", n_boot=2000, seed=0) -> tuple:
     return header, rows
 
 
-def run(files: dict, setting: str, resolution: float = 0.05, n_boot: int = 200, block: int = 16, seed: int = 0,
+def run(files: dict, settings=SETTINGS, resolution: float = 0.05, n_boot: int = 200, block: int = 16, seed: int = 0,
         progress: bool = True) -> dict:
-    """{recording: :func:`score_variants`} of one setting's grid on every recording of ``files``."""
+    """{setting: {recording: :func:`score_variants`}} of each setting's grid on every recording of ``files`` (each
+    recording read and split once for all settings)."""
     from tqdm.auto import tqdm
 
     from crfmap.assess.scansplit import scan_split
     from crfmap.io.recordings import load_recording
 
-    presets = variants(setting)
-    out = {}
-    for name, path in tqdm(files.items(), desc=f"trade-off of {setting}", unit="recording", disable=not progress):
+    out = {setting: {} for setting in settings}
+    for name, path in tqdm(files.items(), desc="trade-offs", unit="recording", disable=not progress):
         split = scan_split(load_recording(path).scans, resolution)
-        out[name] = score_variants(split, presets, n_boot=n_boot, block=block, seed=seed)
+        for setting in settings:
+            out[setting][name] = score_variants(split, variants(setting), n_boot=n_boot, block=block, seed=seed)
     return out
 
 
@@ -206,8 +212,8 @@ def main(argv=None) -> int:
     if unknown:
         parser.error(f"unknown recording(s) {', '.join(unknown)}; known: {', '.join(RECORDINGS)}")
     files = {name: data_file(RECORDINGS[name]) for name in (args.recordings or RECORDINGS)}
-    for setting in SETTINGS:
-        header, rows = tradeoff_table(run(files, setting, n_boot=args.boot))
+    for setting, scores in run(files, n_boot=args.boot).items():
+        header, rows = tradeoff_table(scores)
         print(f"\n{setting}: sub-goals met on {len(files)} recordings (mean difference)\n")
         print(tabulate(rows, header, tablefmt="github"))
     if args.closed_loop:
