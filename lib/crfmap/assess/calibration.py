@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from crfmap.assess.scansplit import DEFAULT_BLOCK, block_resamples, percentile_interval
 from crfmap.crf.presets import LOGIT_FLOOR, temper
 from crfmap.errors import InputError
 
@@ -107,7 +108,7 @@ def split_calibration(split, predictions: dict, group: str = "all", bins: int = 
     return out
 
 
-def paired_calibration(split, predictions: dict, reference: str, n_boot: int = 200, block: int | None = None,
+def paired_calibration(split, predictions: dict, reference: str, n_boot: int = 200, block: int = DEFAULT_BLOCK,
                        seed: int = 0, group: str = "all", bins: int = DEFAULT_BINS, level: float = 0.95) -> dict:
     """Each prediction's ECE with a spatial-block bootstrap interval, and its paired difference to ``reference``.
 
@@ -124,11 +125,9 @@ def paired_calibration(split, predictions: dict, reference: str, n_boot: int = 2
     >>> abs(c["raw"]["ece"] - split_calibration(sp, p)["raw"]["ece"]) < 1e-12, c["raw"]["ece_diff_ci"]
     (True, (0.0, 0.0))
     """
-    from crfmap.assess.scansplit import DEFAULT_BLOCK, block_resamples, percentile_interval
-
     if reference not in predictions:
         raise InputError("reference", f"{reference!r} is not one of the predictions ({', '.join(predictions)})")
-    r = block_resamples(split, n_boot=n_boot, block=DEFAULT_BLOCK if block is None else block, seed=seed)[group]
+    r = block_resamples(split, n_boot=n_boot, block=block, seed=seed)[group]
     if r.n_blocks == 0:
         raise InputError(group, "no cell of this group was observed by the split's second half")
     weights = np.ones((1, r.n_blocks)) if r.draws is None else np.vstack([np.ones(r.n_blocks), r.draws])
