@@ -154,28 +154,15 @@ LOOP_METRICS = ("scans", "plans_into_walls", "dangerous_miss_rate", "ghosts")  #
 
 def closed_loop_table(records, reference="raw", n_boot=2000, seed=0) -> tuple:
     """(header, rows): per onboard kind (a row) the mean over scenes of :data:`LOOP_METRICS` and its paired
-    difference to ``reference`` with a 95 % bootstrap interval over scenes."""
-    from crfstudy.paired import paired_difference
-    from crfstudy.experiments.closed_loop import METRICS
+    difference to ``reference`` with a 95 % bootstrap interval over scenes: notebook 11's paired table, turned so
+    that the many kinds are rows."""
+    from crfstudy.experiments.closed_loop import METRICS, paired_table
 
-    kinds = list(dict.fromkeys(r["kind"] for r in records))
-    scenes = list(dict.fromkeys(r["scene"] for r in records))
-    by = {(r["scene"], r["kind"]): r for r in records}
-    header = ["onboard map", *(f"{METRICS[m][0]} (vs {reference})" for m in LOOP_METRICS)]
-    rows = []
-    for kind in kinds:
-        row = [kind]
-        for metric in LOOP_METRICS:
-            values = np.array([by[s, kind][metric] for s in scenes], float)
-            if kind == reference:
-                row.append(f"{values.mean():.4g}")
-                continue
-            ref = np.array([by[s, reference][metric] for s in scenes], float)
-            d = paired_difference(values, ref, n_boot=n_boot, seed=seed, lower_is_better=METRICS[metric][1])
-            lo, hi = d["difference_ci"]
-            row.append(f"{values.mean():.4g} ({d['mean_difference']:+.3g} [{lo:+.3g}, {hi:+.3g}])")
-        rows.append(row)
-    return header, rows
+    header, rows = paired_table(records, reference=reference, n_boot=n_boot, seed=seed, metrics=LOOP_METRICS)
+    kinds = [k for k in dict.fromkeys(r["kind"] for r in records) if k != reference]
+    turned = ["onboard map", *(f"{METRICS[m][0]} (vs {reference})" for m in LOOP_METRICS)]
+    # paired_table's columns: the metric, the reference, then every other kind in the records' order
+    return turned, [[kind, *(row[1 + i] for row in rows)] for i, kind in enumerate([reference, *kinds])]
 
 
 def run(files: dict, settings=SETTINGS, resolution: float = 0.05, n_boot: int = 200, block: int = 16, seed: int = 0,

@@ -88,9 +88,10 @@ def run_closed_loop(scenes, kinds=None, settings: ExploreSettings | None = None,
     return records, kept
 
 
-def paired_table(records, reference="raw", n_boot=2000, seed=0, level=0.95):
+def paired_table(records, reference="raw", n_boot=2000, seed=0, level=0.95, metrics=None):
     """(header, rows): per kind and metric the mean over scenes and the paired difference to ``reference``
-    with its bootstrap interval over scenes (resampled with replacement, pairs kept)."""
+    with its bootstrap interval over scenes (resampled with replacement, pairs kept). ``metrics``: keys of
+    :data:`METRICS` to show (None: all), one row each."""
     kinds = list(dict.fromkeys(r["kind"] for r in records))
     scenes = list(dict.fromkeys(r["scene"] for r in records))
     if reference not in kinds:
@@ -98,7 +99,8 @@ def paired_table(records, reference="raw", n_boot=2000, seed=0, level=0.95):
     by = {(r["scene"], r["kind"]): r for r in records}
     header = ["metric"] + [k if k == reference else f"{k} (diff to {reference}, {level:.0%} CI)" for k in kinds]
     rows = []
-    for metric, (label, lower_better) in METRICS.items():
+    for metric in METRICS if metrics is None else metrics:
+        label, lower_better = METRICS[metric]
         ref = np.array([by[s, reference][metric] for s in scenes], float)
         row = [label + (" (lower is better)" if lower_better else " (higher is better)"), f"{ref.mean():.4g}"]
         for kind in kinds:
