@@ -1,48 +1,27 @@
-"""Named CRF configurations, the one source of settings: the thesis's tables, the recommended certainty-scaled model, custom tables.
+"""Named CRF configurations, model and solver together: the one source of settings for every path.
 
-:data:`DEFAULT_PRESET` is what ``crfmap infer`` and ``crfmap evaluate`` run unless told
-otherwise; :func:`custom_preset` makes the preset ``--hidden`` / ``--link`` ask for.
+- ``"thesis"``: the thesis's tables, hidden [[10, 1], [1, 10]] and the identity link, over the whole grid. Its
+  coupling J = ln(10) / 2 = 1.15 is far above the square lattice's critical ln(1 + sqrt 2) / 2 = 0.44: in this
+  ordered phase LBP erases thin walls and gives never-seen space the state of its border. Use it to reproduce the
+  thesis.
+- ``"certainty"``: a cell's observation follows its signed evidence ``x = hits - passes``: P(occupied) =
+  ``sigmoid(l)`` with ``l = min(a + b (x - 1), limit)`` for x > 0 (``(a, b) = occupied``: the first net hit is worth
+  a, each further one b), ``l = -min(c + d (|x| - 1), limit)`` for x < 0 (``(c, d) = free``), l = 0 for x = 0. A
+  wall hit 20 times says ``sigmoid(limit)`` and neighbours cannot vote it away (their pull is at most 4 * 2J <
+  limit); a cell seen once yields. J is below the critical value, so information spreads only a few cells, and LBP
+  runs only within ``margin`` cells of an observation: space far from every observation stays 0.5 (unknown).
+- ``"gated"`` (:data:`DEFAULT_PRESET`): the certainty model at J = 0.30, below LBP's own critical coupling (the Bethe
+  value atanh(1/3) = 0.347), then an :class:`~crfmap.crf.model.gating.EvidenceGate` for what a robot does with the
+  map (``certainty`` opens walls and thickens them). Its result has two faces: ``beliefs``, the probabilities (a
+  ``.npy``; Brier and calibration score them), and ``nav2_map``, the gate's decision (a map_server map; what the node
+  publishes).
 
-- ``"thesis"``: the thesis's defaults, hidden [[10, 1], [1, 10]] and the identity link, over the whole grid. Its
-  coupling J = ln(10) / 2 = 1.15 is far above the square lattice's critical coupling ln(1 + sqrt 2) / 2 = 0.44: the
-  CRF is in its ordered phase, so LBP erases thin walls and gives never-seen space the state of its border. Use it
-  to reproduce the thesis.
-- ``"certainty"``: each cell's link strength follows its
-  evidence. A cell's signed evidence is ``x = hits - passes`` (the quantity the thesis's
-  arctan model turns into P). Its observation says P(occupied) = ``sigmoid(l)`` with
-  ``l = min(a + b (x - 1), limit)`` for x > 0 (``(a, b) = occupied``: the first net hit is
-  worth a, each further one b) and ``l = -min(c + d (|x| - 1), limit)`` for x < 0
-  (``(c, d) = free``); x = 0 gives l = 0. A wall hit 20 times says ``sigmoid(limit)`` and neighbours cannot vote it away
-  (their pull is at most 4 * 2J < limit), a cell seen once says little and yields, a cell
-  never seen (x = 0) says nothing. The hidden coupling J is below the critical value, so
-  information spreads only a few cells, and LBP runs only within ``margin`` cells of an
-  observation: space far from every observation stays exactly 0.5 (unknown).
+``temperature`` T (default 1: no change) tempers the whole refined map, ``P' = sigmoid(logit(P) / T)``
+(:func:`temper`); :func:`crfmap.assess.calibration.fit_temperature` fits it.
 
-- ``"gated"`` (:data:`DEFAULT_PRESET`, what every path runs unless told otherwise: ``crfmap infer``,
-  ``crfmap evaluate``, ``crfmap node refine`` and ``node map``, the online mapper): the certainty model at
-  J = 0.30, below LBP's own critical coupling on the square lattice (the Bethe value atanh(1/3) = 0.347; Onsager's
-  0.441 is the exact model's), followed by an evidence gate (:mod:`crfmap.crf.model.gating`) that lets nav2 read a
-  cell free only where its own beams passed it at least three times net (a subset of the cells the raw grid calls free),
-  keeps repeatedly hit and on-a-wall cells lethal, lets lone hits (ghosts) go, keeps walls from growing into space
-  no beam reached, and gives never-observed cells the building's rate P = 0.15 (still unknown to nav2). Chosen for
-  what a robot does with the map (issue 38: dangerous misses, ghosts, wall thickness, AMCL localisation), where
-  ``certainty`` opens walls and triples their thickness. Its result has two faces: ``beliefs``, the probabilities
-  (LBP and the never-observed prior: what a ``.npy`` holds and Brier / calibration score), and ``nav2_map``, those
-  beliefs moved by the gate into the class each cell's own evidence allows (what a map_server map holds and the
-  node publishes).
-
-``temperature`` T (default 1: no change) scales the output's log-odds, ``P' = sigmoid(logit(P) / T)``
-(:func:`temper`), applied to the whole refined map: T > 1 softens an over-confident map, T < 1 sharpens
-an under-confident one; P = 0.5 (unknown) stays 0.5. :func:`crfmap.assess.calibration.fit_temperature` fits it
-by the log-loss on the cells a recording's held-out scans observed.
-
-The per-cell strength needs no kernel change: it is a per-cell link table ``[[w, 1], [1, w]]`` with ``w = exp(|l|)``
-applied to the hard observation ``o = (x > 0)``, and such a table turns that observation into exactly the
-probability ``sigmoid(l)`` (:func:`crfmap.crf.model.potentials.link_unary`), which LBP takes with the identity link.
-
-A map file holds P, not counts. The preset then reads the thesis's model backwards, ``x = tan(pi (P - 0.5))``: exact
-for grids crfmap builds (P = 0.5 + atan(x) / pi), and P = 0 or 1 (a trinary map's free and occupied) gives x = -inf
-or +inf, i.e. the strongest observation ``sigmoid(-limit)`` or ``sigmoid(limit)``; unknown (0.5) gives no link.
+The scaled observation reaches LBP as a probability through the identity link. A map file holds P, not counts: the
+preset reads the thesis's model backwards, ``x = tan(pi (P - 0.5))`` (exact for grids crfmap builds; P = 0 or 1, a
+trinary map's free and occupied, gives the strongest observation; 0.5 gives none).
 
 >>> p = get_preset("certainty")
 >>> u = p.observation(hits=np.array([[20, 1, 0]]), passes=np.array([[0, 0, 0]]))
@@ -87,7 +66,7 @@ def coupling_table(coupling: float) -> np.ndarray:
 
 
 def table_coupling(hidden) -> float:
-    """The Ising coupling J = ln(oo * ee / (oe * eo)) / 4 of a hidden table (0 if not attractive-defined).
+    """The Ising coupling J = ln(oo * ee / (oe * eo)) / 4 of a hidden table (inf if an entry is 0).
 
     >>> round(table_coupling([[10, 1], [1, 10]]), 4)
     1.1513
@@ -111,7 +90,7 @@ def evidence_from_probability(probability) -> np.ndarray:
 
 
 def temper(probability, temperature: float) -> np.ndarray:
-    """``sigmoid(logit(P) / T)``: the output of a preset of temperature T (P clipped to [1e-6, 1 - 1e-6] first).
+    """``sigmoid(logit(P) / T)``, P clipped to [LOGIT_FLOOR, 1 - LOGIT_FLOOR] first.
 
     >>> temper(np.array([0.5, 0.9]), 2.0).round(3).tolist()
     [0.5, 0.75]
@@ -136,10 +115,10 @@ CACHE_SLOTS = 1024  # a power of two
 
 @njit(cache=True, nogil=True)  # no fastmath: NumPy's operations, in its order
 def _certainty_rows(values, from_probability, o0, o1, f0, f1, limit, out, r0, r1):
-    """The certainty-scaled observation's P(occupied) of rows [r0, r1): ``values`` holds the signed evidence x, or
-    (``from_probability``) a grid's P, read back as x (:func:`evidence_from_probability`). NaN stays NaN."""
-    # results of values met before, by a hash of the value: a map holds few distinct values (Intel's 467 in 589,095
-    # cells; counts are integers), so most cells skip the tan and exp. NaN never equals a key: it goes the long way
+    """The certainty-scaled P(occupied) of rows [r0, r1) from the evidence x, or (``from_probability``) from a grid's
+    P read back as x (:func:`evidence_from_probability`). NaN stays NaN."""
+    # a cache of results keyed by a hash of the value: a map holds few distinct values, so most cells skip the tan
+    # and exp. NaN never equals a key: it goes the long way
     keys = np.full(CACHE_SLOTS, np.nan)
     results = np.empty(CACHE_SLOTS)
     for y in range(r0, r1):
@@ -172,7 +151,7 @@ def _certainty_rows(values, from_probability, o0, o1, f0, f1, limit, out, r0, r1
 
 @dataclass(frozen=True)
 class Preset:
-    """One named CRF configuration (see the module docstring)."""
+    """One named CRF configuration (see the module docstring); the solver fields are what every path runs it with."""
 
     name: str
     purpose: str
@@ -184,8 +163,7 @@ class Preset:
     margin: int | None = None  # infer only within this many cells of an observation (None: everywhere)
     link: np.ndarray = field(default_factory=lambda: DEFAULT_LINK.copy(), repr=False)  # observation-cell table
     pairing: str = "receiver"  # how a non-symmetric hidden table applies to an edge
-    temperature: float = 1.0  # output P' = sigmoid(logit(P) / T); 1 leaves LBP's P as it is (see temper)
-    # the solver: what every path runs this preset with (crfmap infer, evaluate, the node, the online mapper)
+    temperature: float = 1.0  # output P' = sigmoid(logit(P) / T) (see temper)
     tol: float = 1e-5  # stop when an iteration moves no message by more than this
     max_iter: int = 1000  # iteration limit
     schedule: str = "checkerboard"  # a name of crfmap.crf.inference.schedules.SETTINGS
@@ -255,7 +233,7 @@ class Preset:
             x = np.asarray(probability, np.float64)
             if not self.scaled:
                 return x
-        # one pass over the cells (NumPy's nine temporaries took 12 ms on a 600k-cell map, as long as 10 LBP passes)
+        # one pass over the cells: NumPy's nine temporaries cost as long as several LBP passes
         rows = np.ascontiguousarray(x).reshape(-1, x.shape[-1] if x.ndim else 1)
         out = np.empty(rows.shape)
         if rows.size:
@@ -270,15 +248,12 @@ class Preset:
         return near_cells(observed, int(self.margin))
 
     def refine(self, grid=None, hits=None, passes=None, within=None, **options):
-        """Run LBP with this preset: on counts (``hits``, ``passes``) or on a grid's P.
+        """Run LBP with this preset on counts (``hits``, ``passes``) or on a grid's P; an
+        :class:`~crfmap.crf.inference.result.LBPResult`, ended through :meth:`finish`.
 
-        Returns the :class:`~crfmap.crf.inference.result.LBPResult`; outside :meth:`region` the beliefs are
-        the observation itself (0.5 where nothing was observed); a ``temperature`` other than 1 then
-        tempers the whole map (:func:`temper`). ``within`` (a boolean mask such as a bound around the robot)
-        further limits the cells that send messages, as ``infer``'s ``region``. ``options`` go to
-        :func:`crfmap.crf.inference.lbp.infer` (``tol``, ``max_iter``, ``schedule``, ...). With an evidence
-        gate, the beliefs take its never-observed prior (:meth:`EvidenceGate.calibrate`: the probabilities)
-        and ``result.nav2_map`` is the map for nav2 (:meth:`EvidenceGate.beliefs_and_map`: the decision).
+        Outside :meth:`region` the beliefs are the observation itself. ``within`` (a boolean mask, e.g. a bound
+        around the robot) further limits the senders, as ``infer``'s ``region``; ``options`` override the solver
+        fields in :func:`crfmap.crf.inference.lbp.infer`.
 
         >>> r = get_preset("certainty").refine(np.array([[0.5, 0.9, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5]]))
         >>> r.converged, float(r.beliefs.probability[0, -1])
@@ -307,8 +282,7 @@ class Preset:
         result = infer(g.with_probability(unary), self.hidden, self.link, region=region, pairing=self.pairing, **options)
         if own is not None:  # outside the preset's region nothing was inferred: keep the observation
             np.copyto(result.beliefs.probability, unary, where=~own)  # the result's own array: checked, in [0, 1]
-        # after LBP and the margin: the gate reads each cell's own evidence, everywhere (a never-observed cell beyond the
-        # margin too gets the building's rate: still unknown to nav2, and a calibrated probability in a .npy)
+        # the gate reads each cell's own evidence everywhere: beyond the margin too a never-observed cell gets the prior
         if self.gate is None and self.temperature == 1.0:  # LBP's beliefs are the result
             return result
         beliefs, decided = self.finish(result.beliefs.probability, hits=hits, passes=passes,
@@ -320,11 +294,9 @@ class Preset:
         return result
 
     def finish(self, probability, hits=None, passes=None, evidence_grid=None, observed=None) -> tuple:
-        """(beliefs, map for nav2 or None) of LBP's ``probability``: the gate's prior, the temperature (the whole map,
-        observation-only cells too), then the gate's decision from those beliefs (None without a gate).
-
-        Each cell's evidence comes from its counts (``hits``, ``passes``) or, for a map file, is read back from its P
-        (``evidence_grid``, with the ``observed`` mask). :meth:`refine` and the online mapper end through here.
+        """(beliefs, map for nav2 or None without a gate) of LBP's ``probability``: the gate's prior, the temperature
+        (whole map), then the gate's decision. Each cell's evidence comes from ``hits`` and ``passes`` or, for a map
+        file, from its P (``evidence_grid``, with the ``observed`` mask). :meth:`refine` and the online mapper end here.
         """
         tempered = None if self.temperature == 1.0 else (lambda p: temper(p, self.temperature))
         if self.gate is None:
@@ -343,19 +315,10 @@ PRESETS = {
         "certainty", "recommended: certainty-scaled observations (link strength follows hits - passes), coupling "
         "below critical, LBP only near observations: improves real maps, keeps walls, leaves unexplored space unknown",
         coupling_table(0.35), scaled=True, occupied=(1.5, 0.1), free=(0.75, 0.2), limit=6.0, margin=5),
-    # Chosen for navigation (issue 38) on Intel and ACES only, confirmed on the two ROS bags, MIT CSAIL and Freiburg
-    # 101: the certainty model, over the scan, temporal and block splits of Intel and ACES on the grid
-    # J in {0.25, 0.30, 0.33, 0.35} x pi in {0.1 .. 0.5}, scoring the beliefs (the prior, not the gate's decision):
-    # J by held-out log-loss with occupied cells weighted 3x (J shapes the map nav2 reads; dangerous misses are the
-    # costlier error), J = 0.30 (below LBP's Bethe point atanh(1/3) = 0.347, so it converges 2.4x faster than at
-    # it); pi at that J by held-out Brier (pi changes no decision, only never-observed probabilities), pi = 0.15.
-    # The gate's free_evidence = 3 was read off the measured trade-off curves (notebook 12;
-    # `python -m crfstudy.analysis.tradeoff --closed-loop`): on Intel and ACES it halves the raw grid's dangerous
-    # misses where 2 (the least that never frees a cell the raw grid does not call free) cut a fifth to a quarter,
-    # for 6 % fewer free cells than the raw grid and no slower exploration with the online CRF; 4 costs 10 % of the
-    # free cells and 30 more scans of exploration. `python -m crfstudy.analysis.gate_search` reruns the J x pi
-    # search (cached in study/crfstudy/analysis/gate_search_intel_aces.json); `crfmap evaluate`, notebook 10 and
-    # notebook 12 score it beside certainty on every metric.
+    # Chosen on Intel and ACES's held-out splits (`python -m crfstudy.analysis.gate_search` reruns it): J by log-loss
+    # with occupied cells weighted 3x (dangerous misses are the costlier error), pi at that J by Brier (pi moves no
+    # decision); free_evidence = 3 read off the trade-off curves (notebook 12): 2 is the least that never frees a
+    # cell the raw grid does not, 4 costs free cells and exploration.
     "gated": Preset(
         "gated", "recommended for navigation: the certainty model at J = 0.30 (below LBP's Bethe point), gated by "
         "each cell's own evidence: free only after three net passes (never a cell the raw grid does not call free), "

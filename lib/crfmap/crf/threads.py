@@ -1,11 +1,9 @@
 """Running ``nogil`` numba kernels on several threads: row bands over Python threads instead of numba's parfor.
 
-A kernel compiled with ``parallel=True`` costs two to three times the compile time of the same loop compiled
-serially (numba's parfor passes and its gufunc wrapper), and that compile is the wait of a first ``crfmap infer``
-and of the warm-up. So crfmap's kernels are serial ``@njit(nogil=True)`` functions over a range of rows (or a list
-of independent jobs), and the threads come from here: a persistent pool per thread count, the calling thread doing
-one share itself. The thread count is the caller's, or numba's (``numba.get_num_threads``, which
-:func:`crfmap.crf.inference.lbp.infer` sets for the duration of a call).
+A ``parallel=True`` kernel takes two to three times as long to compile as the same loop compiled serially, and that
+compile is the wait of a first ``crfmap infer``. So crfmap's kernels are serial ``@njit(nogil=True)`` functions over
+a range of rows (or a list of jobs), run here on a persistent pool per thread count, the calling thread doing one
+share itself. The thread count is the caller's, or ``numba.get_num_threads()`` (which ``infer`` sets for a call).
 
 >>> import numpy as np
 >>> from numba import njit
@@ -64,9 +62,8 @@ def _run_group(kernel, calls):
 def run_all(kernel, calls, threads=None) -> list:
     """``kernel(*args)`` for every ``args`` of ``calls`` on ``threads`` threads, the caller's included; results in order.
 
-    Thread t runs calls t, t + threads, t + 2 threads, ... (so with two calls per thread, the first
-    and last -- e.g. the bands at the grid's edges -- go to different threads). A thread stops at
-    its first failing call; the exception is raised here, after every thread finished.
+    Thread t runs calls t, t + threads, ... (so the first and last, e.g. the bands at the grid's edges, go to
+    different threads). A thread stops at its first failing call, raised here after every thread finished.
     """
     calls = list(calls)
     n = min(thread_count(threads), len(calls))

@@ -1,18 +1,16 @@
 """Hard evidence: the cells whose state is certain, the messages they send, and contradictions.
 
-An observed cell with P(occupied) exactly 0 or 1 makes its hidden cell certain when the link table gives the other
-hidden state zero weight (identity link: P in {0, 1}). A link with no zero entry never makes a cell certain, nor
-does a P strictly inside (0, 1) (no row of a table is all zero). A certain cell's exact marginal is 0 or 1 whatever
-its neighbours are, so :func:`crfmap.crf.inference.lbp.infer` *clamps* it: its belief is exactly its state and it
-sends, every iteration, the message that state implies (the table's column for it, normalised). It is never updated,
-so no floor on its observation lets neighbours overturn it.
+An observed P(occupied) of exactly 0 or 1 makes its hidden cell certain when the link gives the other hidden state
+zero weight (identity link: P in {0, 1}); a link with no zero entry, or a P inside (0, 1), never does. A certain
+cell's exact marginal is its state whatever its neighbours are, so :func:`crfmap.crf.inference.lbp.infer` *clamps*
+it: its belief is exactly its state and it sends, every iteration, the message that state implies (the table's
+column for it, normalised); it is never updated, so no floor lets neighbours overturn it.
 
 A hidden table with a zero entry carries certainty on: if column ``t[:, s]`` has one zero, the neighbour of a cell
-certain in state ``s`` is certain too (unit propagation; exact, as every joint state of positive weight agrees).
-Certainties that disagree, or a certain state whose column is all zero, leave no joint state of positive weight:
-:class:`InputError` naming the cell. A state whose column is all zero towards an existing neighbour is impossible
-(the cell is then certain of the other). On a chain this is arc consistency, which finds every certain cell and
-every contradiction; on a loopy grid it may miss some (then the floors keep LBP finite).
+certain in state ``s`` is certain too (unit propagation; exact). Certainties that disagree, or a certain state whose
+column is all zero, leave no joint state of positive weight: :class:`InputError` naming the cell. A state whose
+column is all zero towards an existing neighbour is impossible. On a chain this is arc consistency, which finds
+every certain cell and contradiction; on a loopy grid it may miss some (then the floors keep LBP finite).
 
 >>> import numpy as np
 >>> from crfmap.crf.model.potentials import directional_tables
@@ -34,8 +32,9 @@ _STEPS = np.array([[0, 1], [0, -1], [1, 0], [-1, 0]], np.int64)
 
 
 @njit(nogil=True, cache=True)
-def _certain_from_observations(prob, link, out, r0, r1):
-    """1 / 0 where the link makes a cell certainly occupied / empty, UNCERTAIN elsewhere (rows [r0, r1)); the count."""
+def _certain_from_observations(prob, link, out, write, r0, r1):
+    """How many cells of rows [r0, r1) the link makes certain; with ``write``, their state into ``out`` (1 / 0
+    certainly occupied / empty, UNCERTAIN elsewhere)."""
     w = prob.shape[1]
     n = 0
     for y in range(r0, r1):
@@ -48,23 +47,9 @@ def _certain_from_observations(prob, link, out, r0, r1):
                 s = 1
             elif occ == 0.0 and emp > 0.0:
                 s = 0
-            out[y, x] = s
+            if write:
+                out[y, x] = s
             n += s >= 0
-    return n
-
-
-@njit(nogil=True, cache=True)
-def _count_certain_observations(prob, link, r0, r1):
-    """How many cells of rows [r0, r1) the link makes certain (as :func:`_certain_from_observations`, writing nothing)."""
-    w = prob.shape[1]
-    n = 0
-    for y in range(r0, r1):
-        for x in range(w):
-            p = prob[y, x]
-            occ = link[0] * p + link[1] * (1.0 - p)
-            emp = link[2] * p + link[3] * (1.0 - p)
-            if (emp == 0.0 and occ > 0.0) or (occ == 0.0 and emp > 0.0):
-                n += 1
     return n
 
 
@@ -191,17 +176,17 @@ def forced_states(tables) -> np.ndarray:
 def certain_states(probability, link, tables, senders=None, name="grid"):
     """Per cell 1 (certainly occupied), 0 (certainly empty) or UNCERTAIN (-1), as int8 [y, x]; None if none is certain.
 
-    ``tables`` are the four directional tables (:func:`crfmap.crf.model.potentials.directional_tables`);
-    certainty spreads only from cells in ``senders`` (a boolean mask, None: all). Raises
-    :class:`InputError` (naming ``name`` and the cell) on contradictory hard evidence.
+    ``tables``: the four directional tables; certainty spreads only from ``senders`` (a boolean mask, None: all).
+    Contradictory hard evidence raises :class:`InputError` naming ``name`` and the cell.
     """
     prob = np.ascontiguousarray(probability, dtype=np.float64)
     link = np.asarray(link, np.float64).ravel()
     forced = forced_states(tables)
-    if not np.any(forced == -2) and sum(over_rows(_count_certain_observations, prob.shape[0], prob, link)) == 0:
+    if not np.any(forced == -2) and sum(over_rows(_certain_from_observations, prob.shape[0], prob, link,
+                                                  np.empty((1, 1), np.int8), False)) == 0:
         return None  # the common case: no state array (a full-size write into fresh memory)
     state = np.empty(prob.shape, np.int8)
-    n = sum(over_rows(_certain_from_observations, prob.shape[0], prob, link, state))
+    n = sum(over_rows(_certain_from_observations, prob.shape[0], prob, link, state, True))
     if np.any(forced != UNCERTAIN):
         use = senders is not None
         mask = np.ascontiguousarray(senders, dtype=np.bool_) if use else np.ones((1, 1), np.bool_)

@@ -1,45 +1,33 @@
 """Evidence gating: what a refined map may say to nav2 about a cell, given that cell's own evidence.
 
-nav2 reads a map in three classes (map_saver's trinary): lethal P >= 0.65, free P <= 0.196, unknown
-between (as written, on v = rint(100 P): lethal v >= 65, free v <= 20). A planner drives through free cells, so a refinement that calls a cell free which the raw
-grid kept lethal or unknown opens a wall; LBP does that wherever a weakly observed cell (a wall face
-passed by grazing beams, a cell seen once) sits next to free space, and it grows walls into space
-no beam reached. An :class:`EvidenceGate` lets the CRF's belief stand where the cell's own evidence
-x = hits - passes agrees with the class it puts the cell in, and otherwise moves the belief just
-inside the nearest class the evidence allows:
+nav2 reads a map in three classes (map_saver's trinary, on v = rint(100 P)): lethal v >= 65 (P >= 0.65), free
+v <= 20 (P <= 0.196), unknown between. A refinement that calls free a cell the raw grid kept lethal or unknown opens
+a wall for the planner; LBP does that wherever a weakly observed cell (a wall face grazed by beams, a cell seen once)
+sits next to free space, and it grows walls into space no beam reached. An :class:`EvidenceGate` lets the CRF's
+belief stand where the cell's own evidence x = hits - passes agrees with the class it gives, and otherwise moves the
+belief just inside the nearest class the evidence allows:
 
-- **free needs the cell's own passes**: a cell with x > -``free_evidence`` is never free; its
-  belief is raised to at least :data:`UNKNOWN_FLOOR` (just above nav2's free threshold). With
-  ``free_evidence`` 2 or more the refined map's free cells are a subset of the raw arctan grid's
-  (P = 0.5 + atan(x) / pi <= 0.196 exactly when x <= -2), so no refinement opens a wall the raw
-  map kept closed or unknown.
-- **repeatedly hit cells stay lethal**: a cell with x >= ``lethal_evidence`` keeps at least
-  nav2's occupied threshold (its observation dominates its neighbours); so does a cell hit on
-  balance once (x >= 1) that has an observed-lethal cell among its eight neighbours, i.e. a hit on
-  a wall line (``line_hits``). An *isolated* single net hit is left to the CRF: free neighbours
-  vote it away, which is what removes a ghost (one stale or noisy return in passed space).
-- **never-observed cells become lethal only on a wall line**: a cell no beam reached is lethal
-  only if it closes a one-cell gap between two observed-lethal cells (x >= 1) on opposite sides
-  of it (east-west, north-south or either diagonal); otherwise its belief is capped just below the
-  occupied threshold (:data:`UNKNOWN_CEILING`). Walls then do not grow into space behind them,
-  while a gap in a wall is closed.
-- **never-observed cells start from the building's rate, not from 0.5**: ``unobserved_prior`` pi
-  multiplies the belief of a never-observed cell off every wall line in odds,
-  ``logit(P') = logit(P) + logit(pi)``, which is the belief that cell gets with an observation of
-  P(occupied) = pi (a belief is its observation times its incoming messages; here the prior does not
-  travel on to the neighbours). Raw grids say 0.5 there, though far fewer than half of those cells
-  turn out occupied (held-out scans of Intel and ACES: 16 % and 8 %), while the never-observed cells in
-  a one-cell gap of an observed wall mostly are (82 % and 70 %): those keep the CRF's belief. With the
-  floor above, a never-observed cell still reads unknown to nav2; only its probability is calibrated.
-  pi = 0.5 changes nothing.
+- **free needs the cell's own passes**: a cell with x > -``free_evidence`` is raised to at least
+  :data:`UNKNOWN_FLOOR`. With ``free_evidence`` >= 2 the refined map's free cells are a subset of the raw arctan
+  grid's (P = 0.5 + atan(x) / pi <= 0.196 exactly when x <= -2).
+- **repeatedly hit cells stay lethal**: a cell with x >= ``lethal_evidence`` keeps at least nav2's occupied
+  threshold; so does (``line_hits``) a single net hit (x >= 1) with an observed-lethal cell among its eight
+  neighbours, a hit on a wall line. An isolated single hit is left to the CRF: free neighbours vote it away, which
+  removes a ghost (one stale or noisy return in passed space).
+- **never-observed cells become lethal only on a wall line** (``wall_lines``): only if they close a one-cell gap
+  between two observed-lethal cells on opposite sides (E-W, N-S or a diagonal); otherwise they are capped at
+  :data:`UNKNOWN_CEILING`, so walls do not grow into the space behind them.
+- **never-observed cells start from the building's rate, not 0.5**: ``unobserved_prior`` pi shifts the belief of a
+  never-observed cell off every wall line in log-odds, ``logit(P') = logit(P) + logit(pi)`` (the belief that cell
+  gets from an observation P = pi that does not travel on to its neighbours). Far fewer than half of such cells turn
+  out occupied, while those in a wall's gap mostly are: they keep the CRF's belief. The floor above keeps them unknown
+  to nav2; only their probability is calibrated. pi = 0.5 changes nothing.
 
-The gate has two outputs, because a probability and a decision answer different questions.
-:meth:`EvidenceGate.calibrate` applies the prior only: the refinement's beliefs, the probabilities a user scores or
-fuses (``Preset.refine(...).beliefs``, a ``.npy`` output; Brier and calibration are measured on them).
-:meth:`EvidenceGate.beliefs_and_map` gives the decision too: each belief that would cross one of nav2's thresholds
-moved just inside the class the cell's own evidence allows, the map nav2 reads (``LBPResult.nav2_map``: what every
-path writes as a map_server map and publishes). A belief the gate keeps from crossing is not a better probability,
-only a safer decision, so it is kept out of the beliefs.
+Two outputs, because a probability and a decision answer different questions: :meth:`EvidenceGate.calibrate` applies
+the prior only (the beliefs a user scores or fuses: ``Preset.refine(...).beliefs``, a ``.npy``);
+:meth:`EvidenceGate.beliefs_and_map` also gives the decision, each belief that would cross one of nav2's thresholds
+moved inside the class the evidence allows (``LBPResult.nav2_map``: the map_server map, what the node publishes). A
+belief kept from crossing is a safer decision, not a better probability, so it stays out of the beliefs.
 
 >>> gate = EvidenceGate(unobserved_prior=0.25)
 >>> p = np.array([[0.10, 0.10, 0.10, 0.90, 0.30]])
@@ -60,9 +48,8 @@ from crfmap.errors import InputError
 
 FREE_THRESHOLD = 0.196  # nav2 / map_saver (Jazzy): P <= this is free
 OCCUPIED_THRESHOLD = 0.65  # nav2 / map_saver: P >= this is lethal
-# The gate's two bounds sit inside the unknown band as nav2's map_saver writes it: a cell's OccupancyGrid value is
-# v = rint(100 P), free when v <= rint(100 * 0.196) = 20 and lethal when v >= 65, so P = 0.2 (v = 20) would be
-# written free; 0.21 (v = 21) and 0.64 (v = 64) are written unknown.
+# The gate's bounds, inside the unknown band as map_saver writes it: P = 0.2 (v = 20) would be written free, 0.21 and
+# 0.64 (v = 21, 64) are written unknown.
 UNKNOWN_FLOOR = 0.21
 UNKNOWN_CEILING = 0.64
 
@@ -125,20 +112,13 @@ def _check_evidence_count(value, name):
 
 @dataclass(frozen=True)
 class EvidenceGate:
-    """Which nav2 class a cell's own evidence allows (see the module docstring).
+    """Which nav2 class a cell's own evidence allows (the rules: the module docstring)."""
 
-    ``free_evidence``: net passes (passes - hits) a cell needs before the map may call it free;
-    ``lethal_evidence``: net hits that keep a cell lethal (``math.inf``: none); ``line_hits``: a
-    single net hit next to another observed-lethal cell stays lethal too; ``wall_lines``:
-    never-observed cells may become lethal only in one-cell gaps of observed walls (False: never);
-    ``unobserved_prior``: P(occupied) of a never-observed cell before its neighbours' messages (0.5: none).
-    """
-
-    free_evidence: float = 2.0
-    lethal_evidence: float = 2.0
-    line_hits: bool = True
-    wall_lines: bool = True
-    unobserved_prior: float = 0.5
+    free_evidence: float = 2.0  # net passes (passes - hits) a cell needs before the map may call it free
+    lethal_evidence: float = 2.0  # net hits that keep a cell lethal (math.inf: none)
+    line_hits: bool = True  # a single net hit next to an observed-lethal cell stays lethal too
+    wall_lines: bool = True  # never-observed cells may become lethal only in one-cell gaps of walls (False: never)
+    unobserved_prior: float = 0.5  # P(occupied) of a never-observed cell before its neighbours' messages (0.5: none)
 
     def __post_init__(self):
         prior = self.unobserved_prior
@@ -151,18 +131,14 @@ class EvidenceGate:
     def apply(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
         """The map for nav2, a new float64 [y, x] array: the second of :meth:`beliefs_and_map`.
 
-        Give the cell counts (``hits``, ``passes``), or the signed ``evidence`` x with an ``observed``
-        mask (a map file's P read back by :func:`crfmap.crf.presets.evidence_from_probability`;
-        then observed = x != 0 unless given).
+        Give the cell counts (``hits``, ``passes``), or the signed ``evidence`` x (a map file's P read back by
+        :func:`crfmap.crf.presets.evidence_from_probability`) with an ``observed`` mask (default x != 0).
         """
         return self.beliefs_and_map(probability, hits, passes, evidence, observed)[1]
 
     def beliefs_and_map(self, probability, hits=None, passes=None, evidence=None, observed=None, transform=None):
-        """(beliefs, map for nav2), new float64 [y, x] arrays, each cell's evidence read once: :meth:`calibrate`, then
-        ``transform`` of the beliefs (e.g. a preset's temperature; None: none), then the decision from them: each
-        belief that would cross one of nav2's thresholds moves just inside the class the cell's evidence allows.
-
-        Arguments as :meth:`apply`.
+        """(beliefs, map for nav2), new float64 [y, x] arrays: :meth:`calibrate`, then ``transform`` of the beliefs
+        (e.g. a preset's temperature; None: none), then the decision from them. Arguments as :meth:`apply`.
         """
         cells = self._cells(probability, hits, passes, evidence, observed)
         beliefs = self._calibrate(*cells)
@@ -171,11 +147,7 @@ class EvidenceGate:
         return beliefs, self._decide(beliefs, *cells[1:])
 
     def calibrate(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
-        """The beliefs with the never-observed prior only (a new float64 [y, x] array): probabilities to score.
-
-        Only never-observed cells off every wall line change (``unobserved_prior``); no belief is moved toward a
-        class. Arguments as :meth:`apply`.
-        """
+        """The beliefs with the never-observed prior only, a new float64 [y, x] array. Arguments as :meth:`apply`."""
         return self._calibrate(*self._cells(probability, hits, passes, evidence, observed))
 
     def _cells(self, probability, hits, passes, evidence, observed):

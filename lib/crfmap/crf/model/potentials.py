@@ -8,17 +8,15 @@ Layout (thesis Tables 4, 5, 7): rows are the state of the cell C that a message 
     C0   [ eo,  ee ]]
 
 - ``hidden``: cell-cell potential of the hidden lattice (default [[10, 1], [1, 10]]).
-- ``link``: observation-cell potential (default identity [[1, 0], [0, 1]]); the observed node
-  holds the grid's P(occupied) and sends one message through it.
+- ``link``: observation-cell potential (default identity); the observed node holds the grid's P(occupied) and sends
+  one message through it.
 
-A table matters only up to scale: [[10, 1], [1, 10]] and [[0.9, 0.1], [0.1, 0.9]]-style tables differ in strength
-(ratio 10 vs 9), not in kind. Any finite non-negative table with no all-zero row is accepted.
+A table matters only up to scale. Any finite non-negative table with no all-zero row is accepted.
 
 Pairing (how a hidden table applies to an undirected lattice edge):
 
-- ``"receiver"`` (the thesis, eq. 9): every message uses the table with rows = receiving cell.
-  For a symmetric table this is exactly sum-product on the pairwise CRF with edge potential
-  ``hidden``; for a non-symmetric one (such as the thesis's learned tables) it is the thesis's
+- ``"receiver"`` (the thesis, eq. 9): every message uses the table with rows = receiving cell: sum-product on the
+  pairwise CRF for a symmetric table; for a non-symmetric one (the thesis's learned tables) the thesis's
   directed-influence model, which has no joint distribution to compare against.
 - ``"oriented"``: a proper pairwise CRF whose edge potential is ``psi(x_a, x_b) = hidden[x_a, x_b]`` with ``a`` the
   west (lower x) or south (lower y) cell of the edge. Same as ``"receiver"`` for symmetric tables.
@@ -35,15 +33,12 @@ DEFAULT_HIDDEN = np.array([[10.0, 1.0], [1.0, 10.0]])
 DEFAULT_LINK = np.array([[1.0, 0.0], [0.0, 1.0]])
 PAIRINGS = ("receiver", "oriented")
 
-# Message directions, indexed as the kernels store them: the message a cell sends to its
-# east neighbour arrives there "from the west" and is kept in slot 0, and so on.
+# Message directions as the kernels store them: a message sent east arrives "from the west", in slot 0; and so on
 TO_EAST, TO_WEST, TO_NORTH, TO_SOUTH = 0, 1, 2, 3
 
 
 def check_table(table, name="potential") -> np.ndarray:
-    """Return a potential as a (2, 2) float64 array, or raise :class:`InputError`.
-
-    Accepts a nested list, an array, or a string "oo,oe,eo,ee".
+    """A potential (a nested list, an array, or a string "oo,oe,eo,ee") as a (2, 2) float64 array, or InputError.
 
     >>> check_table("10,1,1,10").tolist()
     [[10.0, 1.0], [1.0, 10.0]]
@@ -132,18 +127,15 @@ def message_coefficients(tables) -> np.ndarray:
 
 
 def link_unary(observed, link) -> np.ndarray:
-    """P(occupied) that each observed node's message tells its hidden cell (before flooring).
-
-    The message is ``phi(c) = sum_o link[c, o] * P(o)`` with ``P(o = occupied) = observed``;
-    normalised to its occupied share. An observation the link table calls impossible under both
-    states (phi = 0 for both) carries no information and gives 0.5.
+    """P(occupied) that each observed node's message ``phi(c) = sum_o link[c, o] * P(o)`` tells its hidden cell
+    (before flooring); 0.5 where the link calls the observation impossible under both states.
 
     >>> link_unary(np.array([[0.8]]), DEFAULT_LINK).tolist()
     [[0.8]]
     """
     link = check_table(link, "link")
     p = np.asarray(observed, dtype=np.float64)
-    if p.ndim == 2 and p.size:  # a grid: one pass over rows in bands (NumPy's eight temporaries cost 10x more)
+    if p.ndim == 2 and p.size:  # a grid: one pass over rows in bands (NumPy's eight temporaries cost far more)
         out = np.empty(p.shape)
         over_rows(_link_unary_rows, p.shape[0], np.ascontiguousarray(p), link, out)
         return out
