@@ -1,11 +1,9 @@
-"""Numba kernels converting between the probability layout of :mod:`crfmap.crf.inference._plain_kernels` and the
-red/black odds planes of :mod:`crfmap.crf.engine._message_update` (private; used by :mod:`crfmap.crf.engine.packed`).
+"""Numba kernels converting between the probability layout of :mod:`crfmap.crf.engine.messages` and the red/black
+odds planes of :mod:`crfmap.crf.engine._message_update` (private; used by :mod:`crfmap.crf.engine.packed`).
 
-Kernels over rows take the band ``[r0, r1)`` of rows they do last and release the GIL, so
-:func:`crfmap.crf.threads.over_rows` runs bands on threads (compiling serial loops is two to
-three times faster than numba's parfor). All take ``error_model="numpy"``: under numba's default every
-division checks for a zero divisor (to raise ZeroDivisionError), so no loop with one vectorises (the beliefs
-3.5 ns a cell, not memory-bound); a zero divisor gives inf or NaN, as in NumPy.
+Kernels over rows take their band ``[r0, r1)`` last and release the GIL, for :func:`crfmap.crf.threads.over_rows`.
+All take ``error_model="numpy"``: under numba's default every division checks for a zero divisor (to raise
+ZeroDivisionError), so no loop with one vectorises; a zero divisor gives inf or NaN, as in NumPy.
 """
 from __future__ import annotations
 
@@ -13,15 +11,10 @@ import numpy as np
 from numba import njit
 
 
-# --- layout conversion -------------------------------------------------------------------------
-
 
 @njit(inline="always", cache=True, error_model="numpy")
 def unary_odds(p, link, floor):
-    """Odds of the message an observation P(occupied) = p sends through ``link`` (floored).
-
-    ``link`` = (l00, l01, l10, l11); as :func:`crfmap.crf.model.potentials.link_unary`.
-    """
+    """Odds of the message an observation P(occupied) = p sends through ``link`` = (l00, l01, l10, l11), floored."""
     return _odds(link[0] * p + link[1] * (1.0 - p), link[2] * p + link[3] * (1.0 - p), floor)
 
 
@@ -45,10 +38,8 @@ def _pack_unary(prob, y0, x0, h, w, link, floor, un, r0, r1):
 
 @njit(nogil=True, cache=True, error_model="numpy")
 def _pack_messages(msg_p, y0, x0, h, w, floor, out, r0, r1):
-    """Probability messages [4, y, x] of the block into odds planes ``out`` (floored).
-
-    A slot with no neighbour behind it in the whole grid stays uniform (odds 1).
-    """
+    """Probability messages [4, y, x] of the block into odds planes ``out`` (floored; a slot with no neighbour
+    behind it in the whole grid uniform)."""
     grid_h, grid_w = msg_p.shape[1], msg_p.shape[2]
     for y in range(r0, r1):
         gy = y0 + y
@@ -65,11 +56,8 @@ def _pack_messages(msg_p, y0, x0, h, w, floor, out, r0, r1):
 
 @njit(nogil=True, cache=True, error_model="numpy")
 def _unpack_messages(packed, y0, x0, h, w, act, use_act, out, r0, r1):
-    """Odds planes back into probability messages ``out[4, y0 + y, x0 + x]``.
-
-    With ``use_act`` only slots whose sender is an active cell of the block are written (the
-    others did not change, and a round trip through odds would perturb them by rounding).
-    """
+    """Odds planes back into probability messages ``out[4, y0 + y, x0 + x]``; with ``use_act`` only the slots of
+    active senders (the others did not change, and a round trip through odds would perturb them by rounding)."""
     for y in range(r0, r1):
         for x in range(w):
             c = (x + y) & 1
@@ -168,7 +156,7 @@ def _pack_mask(mask, y0, x0, h, w, out, r0, r1):
 @njit(inline="always", cache=True, error_model="numpy")
 def _start_row(prob, y, link, floor, co, fu, un):
     """Row y's observation odds into ``un``; returns (cells outside [0, 1] or not finite, cells the link makes
-    certain). The check and the odds in one loop (occ and emp computed once), then the two colour planes."""
+    certain), counted in the same loop."""
     w = prob.shape[1]
     wp = un.shape[2]
     one = co[8]
@@ -182,7 +170,7 @@ def _start_row(prob, y, link, floor, co, fu, un):
         certain += np.int64(((emp == 0.0) & (occ > 0.0)) | ((occ == 0.0) & (emp > 0.0)))
         fu[x] = _odds(occ, emp, floor)
     # cells 2m and 2m + 1 sit at plane index m + 1 of colours ce and 1 - ce: one unit-stride loop over the pairs
-    # (a loop per colour reading every other odds vectorised poorly: 0.25 ns a cell, most of packing)
+    # (a loop per colour reading every other odds vectorised poorly)
     ce = y & 1
     cq = 1 - ce
     for m in range(w >> 1):
@@ -199,15 +187,10 @@ def _start_row(prob, y, link, floor, co, fu, un):
 
 @njit(nogil=True, cache=True, error_model="numpy")  # no fastmath: the grid check must see NaN
 def _pack_start(prob, link, floor, co, un, msg, stats, b):
-    """Whole grid from uniform messages in one trip through memory: observation odds into ``un``, and of the
-    message slots only those no neighbour ever sends into (at the grid's edges) and the ghost rows, uniform (1). The
-    first pass sends the red cells' first half-sweep from the odds alone (``uniform_start`` of
-    :func:`crfmap.crf.engine._message_update._pass`) into every black cell's other slots, and the black cells then
-    send into every red cell's before anything reads them: no message plane is filled. Also counts per row block,
-    into ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
-
-    Rows go in ``stats.shape[0]`` blocks; this call does block ``b`` (blocks are independent, so
-    threads may run them at once).
+    """Row block ``b`` of ``stats.shape[0]`` (independent: threads may run them at once) of a whole grid from uniform
+    messages: observation odds into ``un`` and, of the message slots, only those no neighbour ever sends into and the
+    ghost rows (1); the first pass (``uniform_start``) writes every other slot before anything reads it. Counts into
+    ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
     """
     h, w = prob.shape
     wp = un.shape[2]

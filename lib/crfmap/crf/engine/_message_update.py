@@ -1,27 +1,23 @@
 """The message update of the fast engine: checkerboard LBP kernels on odds-ratio red/black planes (private).
 
-A cell's four messages are computed in :func:`_four_unclamped` / :func:`_four`, a row of one colour
-sends in :func:`_send`, and a pass of several iterations (temporal blocking) is :func:`_pass`
-(:func:`_trapezoid` on every band of rows, then the inverted ones between bands, a step of rows at a time in
-:func:`_phase_rows`), the only kernel Python calls to iterate. Same schedule and fixed
-point as :func:`crfmap.crf.inference._plain_kernels._send_rows`
+A cell's four messages are :func:`_four`, a row of one colour sends in :func:`_send`, and a pass of several
+iterations is :func:`_pass` (:func:`_trapezoid` on every band of rows, then the inverted ones between bands), the only
+kernel Python calls to iterate. Same schedule and fixed point as :func:`crfmap.crf.inference._plain_kernels._send_rows`
 (cells with (x + y) even send, then the others), laid out for SIMD and for cache:
 
-- **Odds, not probabilities.** A binary message is one odds ratio r = P/(1-P). The cavity odds of a sender are ``R =
-  U * r_a * r_b * r_c`` (U the observation's odds) and the message it sends through a table t (rows receiver,
-  columns sender) is ``r' = (t00 R + t01) / (t10 R + t11)``: three multiplies, two FMAs and one division, where the
-  probability form needs twice the multiplies; four divisions a cell, which do not bound its rate (a two-division
-  variant measured slower: the speed issue's notes).
-- **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`crfmap.crf.engine.messages`) of
-  the cell in row y with colour c = (x + y) & 1 and x = 2k + ((y + c) & 1). A colour's cells
-  are then contiguous: a half-sweep is a unit-stride loop that vectorises. Row 0 / H + 1 and
-  column 0 / last are ghosts that absorb messages sent off the grid.
-- **Temporal blocking.** One *pass* runs T iterations (2T half-sweeps, "phases") over bands of rows: first every
-  band runs a trapezoid that shrinks by one row per phase at each inner edge (a wavefront inside, so only ~2T + 2
-  rows are live and stay in cache), then the inverted trapezoids between bands finish. Every (phase, row) is
-  computed exactly once after the three rows it depends on, so a pass equals T plain iterations.
-- **Measured changes.** The largest change of a message in probability, ``|r' - r| / ((1 + r)(1 + r'))``, costs four
-  more divisions, so it is measured only on the iterations asked for (by default the last of each pass).
+- **Odds, not probabilities.** A binary message is one odds ratio r = P/(1-P). A sender's cavity odds are ``R = U *
+  r_a * r_b * r_c`` (U the observation's odds) and the message through a table t (rows receiver, columns sender) is
+  ``r' = (t00 R + t01) / (t10 R + t11)``: half the multiplies of the probability form, and one division.
+- **Red/black planes.** ``msg[c, d, 1 + y, 1 + k]`` is slot d (as in :mod:`crfmap.crf.engine.messages`) of the cell
+  in row y with colour c = (x + y) & 1 and x = 2k + ((y + c) & 1): a colour's cells are contiguous, so a half-sweep
+  is a unit-stride loop that vectorises. Rows 0 and H + 1 and the first and last columns are ghosts that absorb
+  messages sent off the grid.
+- **Temporal blocking.** A *pass* runs T iterations (2T half-sweeps, "phases") over bands of rows: every band runs a
+  trapezoid that shrinks by one row per phase at each inner edge (a wavefront, so only ~2T + 2 rows are live, in
+  cache), then the inverted trapezoids between bands finish. Every (phase, row) is computed once, after the three
+  rows it depends on, so a pass equals T plain iterations.
+- **Measured changes.** A message's change in probability, ``|r' - r| / ((1 + r)(1 + r'))``, costs four more
+  divisions, so it is measured only on the iterations asked for (by default the last of each pass).
 
 ``act`` (bounded LBP) holds 1 where a cell may send; ``lo_k, hi_k`` bound the plane indices of each row's active
 cells so a small region costs little. The arrays and the Python driver live in :mod:`crfmap.crf.engine.packed`.
@@ -96,11 +92,10 @@ def _dp(new, old, one):
 def _send(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
     """Cells k0 <= k < k0 + n of colour c in row y send (all have east and west neighbours).
 
-    With ``measure`` the largest change per column is max-accumulated into ``cb[ty]``; ``w_n``,
-    ``w_s`` (1 or 0) drop the north/south message of the top/bottom row, which goes nowhere.
-    Indices are unsigned and arrays are not sliced: both keep the loops vectorised and cheap
-    to enter (rows of a small region are short). Compiled, ``act``'s type picks the rows
-    (:func:`_send_compiled`); this is the same choice in plain Python (``NUMBA_DISABLE_JIT``).
+    With ``measure`` the largest change per column is max-accumulated into ``cb[ty]``; ``w_n``, ``w_s`` (1 or 0)
+    drop the north/south message of the top/bottom row, which goes nowhere. Unsigned indices and no slices keep the
+    loops vectorised and cheap to enter. Compiled, ``act``'s type picks the rows (:func:`_send_compiled`); this is the
+    same choice in plain Python (``NUMBA_DISABLE_JIT``).
     """
     send = _send_masked if _masked(act) else _send_whole
     send(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty)
@@ -179,9 +174,8 @@ def _send_masked(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, t
     b0, b1, b2, b3 = co[4], co[5], co[6], co[7]
     one = co[8]
     zero = one - one
-    if not measure:  # bounded LBP: the measured loop apart, and every old message loaded first (then it vectorises;
-        # a select between the new value and a load of the old one did not: bounded passes 1.6x slower; nor did
-        # this body as an inlined helper shared with the measured loop below: 29 vs 17 ms a pass)
+    if not measure:  # apart from the measured loop, every old message loaded first: only so does it vectorise
+        # (a select with a load of the old value, or one helper shared with the loop below, ran far slower)
         for i in range(n):
             ui = np.uint64(i)
             j = j0 + ui
@@ -220,9 +214,8 @@ def _send_masked(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, t
 
 @njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
 def _uniform_row(msg, un, y, w, co, lo, hi):
-    """The red cells of row y send from uniform incoming messages (the first half-sweep of a whole-grid run from
-    uniform messages): what :func:`_send_whole` computes with every incoming odds 1, without loading them (the
-    packing then writes no message a red cell sends: one trip through memory fewer)."""
+    """The red cells of row y send from uniform incoming messages, without loading them: the first half-sweep of a
+    whole-grid run from uniform messages (so the packing writes no message plane: one trip through memory fewer)."""
     o, y1, j0, e0, w0 = _row_columns(0, y, 0)
     a0, a1, a2, a3 = co[0], co[1], co[2], co[3]
     b0, b1, b2, b3 = co[4], co[5], co[6], co[7]
@@ -309,9 +302,9 @@ def _phase_row(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, c, y, h, w, co, lo,
         _segment(msg, un, act, c, y, k0, k1, h, w, co, lo, hi, measure, cb, ty)
 
 
-# not inlined: both trapezoids call this one compiled loop of rows (inlining the rows twice doubled the kernels'
-# compile time, the first call's wait), once per wavefront step or gap phase: one call per row cost ~7% at 512^2.
-# No branch on which trapezoid calls: LLVM would unswitch the loop on it, compiling the rows twice
+# not inlined: both trapezoids call this one compiled loop of rows (inlining them twice doubled the compile time),
+# once per wavefront step or gap phase (a call per row cost more). No branch on which trapezoid calls: LLVM would
+# unswitch the loop on it, compiling the rows twice
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, measure_from, cb, count, j_from, dj,
                 y_from, dy, y0, y1, ylo, yhi, uniform_start):
@@ -344,16 +337,13 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
                cb, uniform_start, gap, bel, with_beliefs):
     """The trapezoid of the band on rows [y0, y1) (``gap`` False), or the inverted one around the band edge y1.
 
-    Band: phase j covers the band's rows shrunk by j at inner edges (edges at ``ylo`` / ``yhi``, the
-    first / last row that has senders, do not shrink). Wavefront order: at step s, phase j works on
-    row s - j, so the rows a phase needs were finished by phase j - 1 one step earlier and every live
-    row stays in cache. ``uniform_start``: phase 0 sends from uniform messages without loading them. Gap: phase
-    j on rows [y1 - j, y1 + j), for 1 <= j < phases.
+    Band: phase j covers the band's rows shrunk by j at inner edges (edges at ``ylo`` / ``yhi``, the first / last
+    row with senders, do not shrink). At step s, phase j works on row s - j: the rows it needs were finished by phase
+    j - 1 one step earlier, still in cache. Gap: phase j on rows [y1 - j, y1 + j), for 1 <= j < phases.
 
-    ``with_beliefs`` (the whole grid sends: ylo = 0, yhi = h): each row's beliefs go into ``bel`` as soon as it
-    and its two neighbours finished the last phase, while they are in cache. A band does rows [y0 + phases,
-    y1 - phases) (from ylo / to yhi at the grid's edges): at step s the last phase finished row s - phases + 1.
-    The gap does the rows between, [y1 - phases, y1 + phases), after its last phase.
+    ``with_beliefs`` (the whole grid sends): each row's beliefs go into ``bel`` once it and its two neighbours
+    finished the last phase, while in cache: a band does rows [y0 + phases, y1 - phases) (from ylo / to yhi at the
+    grid's edges), the gap the rows between, after its last phase.
     """
     blo = y0 + phases if y0 > ylo else ylo
     bhi = y1 - phases if y1 < yhi else yhi
@@ -371,20 +361,17 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
             _beliefs_row(un, msg, y, w, bel)
 
 
-# a parfor even for one band on one thread: numba compiles the trapezoids' code inside its parallel
-# region to run faster than the same functions called directly (measured: 1.4-1.8x at 512^2, 1.07x at 2048^2);
-# one parallel loop for both stages (not one each): its compile, the first call's wait, is a third shorter
+# a parfor even for one band on one thread: numba compiles the trapezoids' code inside its parallel region to run
+# faster than the same functions called directly; one parallel loop for both stages: a shorter compile
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations, measure_from, cb,
           uniform_start, stage, bel, with_beliefs):
     """Stage ``stage`` of ``iterations`` checkerboard iterations over the bands of rows between ``edges``.
 
     A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the inverted trapezoids
-    between bands; nothing to do with one band). Rows outside [edges[0], edges[-1]) must hold no sender. Iterations
-    from ``measure_from`` on are measured (max-accumulated together into ``cb``); ``uniform_start`` (whole grid,
-    from uniform messages): the red cells' first half-sweep loads no message. ``with_beliefs`` (every cell sends,
-    edges from 0 to h): the beliefs after the pass into ``bel`` [h, w], row by row while the pass has it in cache
-    (one trip through memory fewer than a beliefs pass after it).
+    between bands). Rows outside [edges[0], edges[-1]) must hold no sender. Iterations from ``measure_from`` on are
+    measured (max-accumulated into ``cb``); ``uniform_start``: the red cells' first half-sweep loads no message.
+    ``with_beliefs`` (every cell sends): the beliefs after the pass into ``bel`` [h, w], row by row while in cache.
     """
     phases = 2 * iterations
     nb = edges.shape[0] - 1

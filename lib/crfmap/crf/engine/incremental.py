@@ -1,10 +1,7 @@
-"""Checkerboard LBP kept alive between calls: observations updated cell by cell, runs on changing senders.
-
-What an online mapper needs from the fast engine (:class:`crfmap.mapping.online.OnlineMapper` drives it): one whole
-grid of packed messages that stays between scans, a way to set the observation of the cells a scan touched, and runs
-of LBP on the cells of a disc (rows with a column range each) or on the whole grid, warm-started from the messages
-left before. With a ``margin``, only cells within ``margin`` cells (Chebyshev distance) of a cell whose observation
-was ever set send, as ``infer(region=near_known(grid, margin))`` does for a whole grid.
+"""Checkerboard LBP kept alive between calls, for :class:`crfmap.mapping.online.OnlineMapper`: one whole grid of packed
+messages that stays between scans, the observations of the cells a scan touched set in place, and warm-started runs
+on a disc (rows with a column range each) or the whole grid. With a ``margin``, only cells within ``margin`` cells
+(Chebyshev) of a cell whose observation was ever set send, as ``infer(region=near_known(grid, margin))`` would.
 
 >>> import numpy as np
 >>> lbp = IncrementalLBP(3, 4, [[10, 1], [1, 10]], [[1, 0], [0, 1]])
@@ -28,11 +25,8 @@ from crfmap.grid import UNKNOWN
 
 @njit(cache=True, nogil=True)
 def _set_observations(cells, probability, link, floor, un, known, near, margin):
-    """Observation odds of cells (x, y) = ``cells[i]`` from P(occupied) ``probability[i]`` into the planes ``un``.
-
-    With ``margin`` >= 0, a cell set for the first time marks every cell within ``margin`` (Chebyshev distance) in
-    the red/black planes ``near``, as :func:`crfmap.crf.inference.regions.near_known` does for a whole grid.
-    """
+    """Observation odds of cells (x, y) = ``cells[i]`` from P(occupied) ``probability[i]`` into the planes ``un``; with
+    ``margin`` >= 0, a cell set for the first time marks every cell within ``margin`` in the planes ``near``."""
     height, width = known.shape if margin >= 0 else (0, 0)
     for i in range(cells.shape[0]):
         x = cells[i, 0]
@@ -46,12 +40,8 @@ def _set_observations(cells, probability, link, floor, un, known, near, margin):
 
 
 class IncrementalLBP:
-    """A whole grid of ``height x width`` cells on the fast engine, iterated a little at a time.
-
-    ``hidden``, ``link``: 2x2 tables (:mod:`crfmap.crf.model.potentials`); ``pairing``: ``"receiver"`` or
-    ``"oriented"``. ``margin`` [cells]: only cells near a cell whose observation was set send; None: all.
-    Every cell starts unknown (P = 0.5) with uniform messages.
-    """
+    """A whole grid of ``height x width`` cells on the fast engine, iterated a little at a time; every cell starts
+    unknown with uniform messages. ``hidden``, ``link``, ``pairing``: as ``infer``'s; ``margin`` [cells]: as above."""
 
     def __init__(self, height, width, hidden, link, dtype=np.float32, pairing="receiver", margin=None):
         hidden = check_table(hidden, "hidden")
@@ -86,10 +76,7 @@ class IncrementalLBP:
 
     def run(self, max_iter, tol, threads, rows=None, block=PASS_ITERATIONS) -> list:
         """LBP until ``tol`` or ``max_iter``, warm-started; returns the per-iteration largest changes (NaN: not measured).
-
-        ``rows`` None: every cell sends (under a margin, those near observations); else
-        ``(y0, x_from, x_to)``: only cells x_from[i] <= x < x_to[i] of row y0 + i (e.g. a disc).
-        """
+        ``rows`` ``(y0, x_from, x_to)``: only cells x_from[i] <= x < x_to[i] of row y0 + i send (None: all)."""
         packed = self._packed
         if rows is not None:
             packed.set_rows(*rows, act=None if self.margin is None else self._near)

@@ -1,9 +1,9 @@
 """LBP messages in the probability layout: the floor, uniform, checked and floored arrays, and the beliefs they give.
 
-The layout (shared by the plain kernels of :mod:`crfmap.crf.inference._plain_kernels` and the
-fast engine's unpacked messages): ``msg[d, y, x]`` is the message arriving at cell (y, x) that
-travelled in direction d (0 east-bound, from the west neighbour; 1 west-bound; 2 north-bound;
-3 south-bound), as P(receiver occupied). A slot with no neighbour behind it stays 0.5.
+The layout (the plain kernels' and the fast engine's unpacked messages): ``msg[d, y, x]`` is the message arriving at
+cell (y, x) that travelled in direction d (0 east-bound, from the west neighbour; 1 west-bound, from the east; 2
+north-bound, from the south; 3 south-bound, from the north), as P(receiver occupied). A slot with no neighbour
+behind it stays 0.5.
 """
 from __future__ import annotations
 
@@ -13,9 +13,8 @@ from numba import njit
 from crfmap.crf.threads import over_rows
 from crfmap.errors import InputError
 
-# Messages and observations are kept in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR]: products of five
-# factors then stay far above float32's smallest normal (1e-38), hard evidence (P = 0 or 1, or a
-# table with zeros) stays finite, and contradicting hard evidence gives 0.5 rather than 0/0 = NaN.
+# Messages and observations are kept in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR]: products of five factors stay far above
+# float32's smallest normal, hard evidence stays finite, and contradicting hard evidence gives 0.5, not 0/0 = NaN.
 MESSAGE_FLOOR = 1e-6
 
 
@@ -43,7 +42,6 @@ def check_messages(messages, shape) -> np.ndarray:
 def floored(messages, dtype, shape, floor):
     """A copy in [floor, 1 - floor] of ``dtype``, slots with no neighbour behind them uniform."""
     msg = np.clip(messages, floor, 1.0 - floor).astype(dtype, copy=False)
-    # slots with no neighbour behind them must stay uniform
     msg[0, :, 0] = msg[1, :, -1] = msg[2, 0, :] = msg[3, -1, :] = 0.5
     return msg
 

@@ -1,10 +1,8 @@
 """The fast engine's data: red/black odds planes of a block of the grid, and the passes that iterate them.
 
-:class:`PackedBlock` holds the observations and messages of a rectangular block of cells in the
-layout of :mod:`crfmap.crf.engine._message_update` (odds ratios, one plane per colour, ghost rows
-and columns), converts to and from the probability layout of :mod:`crfmap.crf.engine.messages`,
-and runs checkerboard iterations: temporally blocked passes over bands of rows, and -- on large
-grids -- only over the tiles whose messages still move (:meth:`PackedBlock.run`).
+:class:`PackedBlock` holds the observations and messages of a rectangular block of cells in the layout of
+:mod:`crfmap.crf.engine._message_update`, converts to and from the probability layout of
+:mod:`crfmap.crf.engine.messages`, and runs checkerboard iterations (:meth:`PackedBlock.run`).
 """
 from __future__ import annotations
 
@@ -39,13 +37,10 @@ NO_BELIEFS = np.zeros((1, 1))  # the beliefs argument of a pass that writes none
 
 
 def odds_coefficients(tables, dtype, floor) -> np.ndarray:
-    """(E/N table, W/S table) entries t00 t01 t10 t11, 1, and whether messages need the floor.
-
-    ``tables`` are the four directional tables (rows receiver); east and north must share one,
-    west and south the other (true of both pairings). Scaled so the largest entry is 1. A
-    message through t has odds between t01/t11 and t00/t10; when both lie well inside the
-    floored range the clamp can never act and the hot loop skips it (co[9] = 0).
-    """
+    """(E/N table, W/S table) entries t00 t01 t10 t11 scaled to a largest of 1, then 1, and whether messages need
+    the floor: a message through t has odds between t01/t11 and t00/t10; when both lie well inside the floored range
+    the clamp never acts and the hot loop skips it (co[9] = 0). East and north must share a table, west and south
+    the other (true of both pairings)."""
     tables = np.asarray(tables, dtype=np.float64)
     scale = tables.max()
     clamp = 0.0
@@ -82,10 +77,9 @@ def full_extents(h, w):
 class PackedBlock:
     """Odds messages and observations of a block of ``h x w`` cells in red/black planes.
 
-    ``tables``: (4, 2, 2) directional tables (rows receiver); ``floor``: the message floor in probability.
-    ``arrays`` (msg, un): planes of the right shape and dtype to reuse (their contents are overwritten), e.g. from
-    :mod:`crfmap.crf.engine.workspace`; None allocates new ones. ``fill=False`` leaves the planes undefined for
-    :meth:`start_uniform`, which writes every entry (True fills them with uniform messages and observations).
+    ``tables``: (4, 2, 2) directional tables; ``floor``: the message floor in probability. ``arrays`` (msg, un):
+    planes to reuse (e.g. from :mod:`crfmap.crf.engine.workspace`; None: new ones). ``fill`` True makes them uniform;
+    False leaves them undefined for :meth:`start_uniform`, which writes what is read.
     """
 
     def __init__(self, h, w, dtype, tables, floor, arrays=None, fill=True):
@@ -117,14 +111,10 @@ class PackedBlock:
         over_rows(_pack_unary, self.h, probability, y0, x0, self.h, self.w, link, self.floor, self.un)
 
     def start_uniform(self, probability, link, threads=1):
-        """Whole-grid block from uniform messages: :meth:`set_unary` and the edges' message slots in one trip.
-
-        Packing writes the observation odds and only the message slots no neighbour sends into; the next
-        :meth:`run_pass` sends the red cells' first half-sweep from the odds alone (from uniform messages it
-        depends on the observations only) without loading a message, so no plane is filled with ones. That pass
-        must run at least two iterations of the whole grid. Returns (cells of ``probability``
-        outside [0, 1] or not finite, cells ``link`` makes certain): a caller with either must
-        not use the result (check the grid; clamp certain cells on the unfused path).
+        """Whole-grid block from uniform messages in one trip: the observation odds and only the message slots no
+        neighbour sends into; the next pass (at least two iterations of the whole grid) sends the red cells' first
+        half-sweep from the odds alone. Returns (cells of ``probability`` outside [0, 1] or not finite, cells
+        ``link`` makes certain): with either, the result must not be used.
         """
         link = np.asarray(link, np.float64).ravel()
         stats = np.zeros((max(1, min(4 * int(threads), self.h)), 2), np.int64)
@@ -148,29 +138,21 @@ class PackedBlock:
             self.lo_k, self.hi_k = full_extents(self.h, self.w)
             self._extents_changed()
             return
-        self.act = np.zeros((2, self.h + 2, plane_width(self.w)), np.uint8)
-        over_rows(_pack_mask, self.h, mask, y0, x0, self.h, self.w, self.act)
-        self.use_act = True
-        self.lo_k = np.zeros((2, self.h), np.int64)
-        self.hi_k = np.zeros((2, self.h), np.int64)
-        _active_extents(self.act, self.h, self.w, self.lo_k, self.hi_k)
-        self._extents_changed()
+        act = np.zeros((2, self.h + 2, plane_width(self.w)), np.uint8)
+        over_rows(_pack_mask, self.h, mask, y0, x0, self.h, self.w, act)
+        self.set_packed_mask(act)
 
     def clamp(self, state, implied):
-        """Whole-grid block: certain cells (``state`` >= 0) send ``implied[d, state]`` (probabilities) for ever.
-
-        Call after :meth:`set_messages`; see :mod:`crfmap.crf.model.evidence`.
-        """
+        """Whole-grid block: certain cells (``state`` >= 0) send ``implied[d, state]`` (probabilities) for ever; call
+        after :meth:`set_messages`."""
         p = np.clip(np.asarray(implied, np.float64), self.floor, 1.0 - self.floor)
         act = np.empty(self.un.shape, np.uint8)
         over_rows(_pack_clamped, state.shape[0], state, (p / (1.0 - p)).astype(self.dtype), self.msg, act)
         self.set_packed_mask(act)
 
     def set_packed_mask(self, act):
-        """Only cells whose entry of ``act`` (red/black planes, shape of ``un``) is non-zero send.
-
-        ``act`` is used as is, not copied: its owner may keep updating it between passes.
-        """
+        """Only cells whose entry of ``act`` (red/black planes, shape of ``un``) is non-zero send; ``act`` is not
+        copied: its owner may keep updating it between passes."""
         self.act = act
         self.use_act = True
         self.lo_k = np.zeros((2, self.h), np.int64)
@@ -179,11 +161,8 @@ class PackedBlock:
         self._extents_changed()
 
     def set_rows(self, y0, x_from, x_to, act=None):
-        """Only cells x_from[i] <= x < x_to[i] of row y0 + i send (e.g. a disc).
-
-        With ``act`` (red/black planes as in :meth:`set_packed_mask`), only those among them
-        whose entry is non-zero; ``active_cells`` then counts the whole rows' ranges.
-        """
+        """Only cells x_from[i] <= x < x_to[i] of row y0 + i send (e.g. a disc); with ``act`` (as in
+        :meth:`set_packed_mask`) only those among them it marks (``active_cells`` counts the whole ranges)."""
         self.act = np.zeros((2, 1, 1), np.uint8) if act is None else act
         self.use_act = act is not None
         self.lo_k = np.zeros((2, self.h), np.int64)
@@ -226,11 +205,8 @@ class PackedBlock:
 
     # --- running it -----------------------------------------------------------------------------
     def band_edges(self, iterations, threads):
-        """Row edges of the bands a pass of ``iterations`` uses (one band: run serially).
-
-        Inner edges are multiples of TILE_ROWS and bands are tall enough that neither two
-        gap trapezoids nor two threads ever share a row tile.
-        """
+        """Row edges of the bands a pass of ``iterations`` uses (one band: run serially). Inner edges are multiples of
+        TILE_ROWS and bands are tall enough that neither two gap trapezoids nor two threads share a row tile."""
         ylo, yhi = self.row_range
         rows = yhi - ylo
         min_height = 4 * iterations + 2 * TILE_ROWS + 4
@@ -271,11 +247,8 @@ class PackedBlock:
         return segs, nseg, cells
 
     def run_pass(self, iterations, threads, measure=True, active=None, per_tile=True):
-        """``iterations`` checkerboard iterations; only the tiles in ``active`` send (None: all).
-
-        Returns the largest message change of the last iteration (NaN if not ``measure``) and,
-        with ``per_tile``, the largest change per tile in it (else None).
-        """
+        """``iterations`` checkerboard iterations, only the tiles in ``active`` sending (None: all): the largest message
+        change of the last (NaN if not ``measure``) and, with ``per_tile``, per tile (else None)."""
         args, stages, cb = self._pass_arguments(iterations, threads, measure, active)
         for stage in range(stages):
             _pass(*args, stage, NO_BELIEFS, False)
@@ -310,27 +283,19 @@ class PackedBlock:
 
     def run(self, max_iter, tol, threads, block=PASS_ITERATIONS, freeze=None, first=1, beliefs=None,
             confirm_settled=True):
-        """Iterate until an iteration of *every* cell moves no message by ``tol`` or more.
+        """Iterate until an iteration of *every* cell moves no message by ``tol`` or more; the per-iteration largest
+        changes (NaN where not measured, and for the last if max_iter ends the run before it was confirmed).
 
-        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring its last (start at 1
-        after a warm start, which may stop at once; at ``block`` from uniform messages, which never do: then, with a
-        tol, two passes of ``block / 2`` first). Once two passes measured, a pass is cut to the iterations the last
-        two changes' rate predicts to reach ``tol`` (:func:`_iterations_to_tol`), so the run stops near tol, not up
-        to ``block - 1`` iterations past it. With ``freeze`` (a change smaller than ``tol``; None: ``FREEZE *
-        tol``): once fewer than SPARSE_FRACTION of the tiles moved by more than ``freeze`` in a measured iteration,
-        only those tiles and their four neighbours iterate in the next pass; the others ("frozen") keep their
-        messages, which last moved by at most ``freeze``. When the moving tiles settle below ``tol``, one iteration
-        of every cell decides (``confirm_settled`` False: the run ends there, unconfirmed, for a caller that
-        iterates on and confirms itself). ``freeze=0`` freezes only tiles that did not move at all, which changes
-        nothing.
+        Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring its last (``first`` 1
+        after a warm start, which may stop at once; ``block`` from uniform messages: then two passes of ``block /
+        2`` first). Once two passes measured, a pass is cut to the iterations their rate predicts to reach ``tol``,
+        so the run stops near tol. ``freeze`` (below ``tol``; None: ``FREEZE * tol``; 0 changes nothing): once fewer
+        than SPARSE_FRACTION of the tiles moved by more than it, only those tiles and their four neighbours iterate;
+        when they settle below ``tol``, one iteration of every cell decides (``confirm_settled`` False: the run ends
+        unconfirmed, for a caller that confirms itself).
 
-        With ``beliefs`` (a float64 [h, w] array) a whole-grid pass that is likely the last (it ends at max_iter,
-        the rate predicts tol within it, or it confirms settled tiles) also writes the beliefs after it there,
-        while it has each row in cache; :attr:`beliefs_written` then says whether the last pass did (else
-        call :meth:`beliefs`). Only when every cell of every row sends (no mask).
-
-        Returns the list of per-iteration largest changes (NaN where not measured, and for the
-        last one if max_iter ends the run before a whole-grid iteration confirmed a settled one).
+        ``beliefs`` (float64 [h, w], no mask): a whole-grid pass that is likely the last also writes the beliefs
+        there while each row is in cache; :attr:`beliefs_written` says whether the last pass did.
         """
         fusable = beliefs is not None and not self.use_act and self.row_range == (0, self.h) and self.h > 0
         self.beliefs_written = False
@@ -339,9 +304,8 @@ class PackedBlock:
             freeze = FREEZE * tol
         changes = []
         size = max(1, int(first))
-        # from uniform messages (first = block) two half passes come first: their changes give the rate of
-        # convergence before a whole pass could run past tol (not for tol 0, which runs to max_iter: on a grid
-        # beyond the cache each pass is one more trip through memory)
+        # from uniform messages two half passes give the rate before a whole pass could run past tol (not for tol 0,
+        # which runs to max_iter: each pass is one more trip through memory)
         halves = 2 if size >= block >= 4 and tol > 0 else 0
         size = block // 2 if halves else size
         # freezing tiles pays only on grids of many tiles
@@ -356,7 +320,6 @@ class PackedBlock:
             self.beliefs_written = with_beliefs = fusable and active is None and last
             args, stages, cb = self._pass_arguments(n, threads, True, active)
             for stage in range(stages):  # the bands, then the gaps between them
-                # the numba pass: every message update happens in there
                 _pass(*args, stage, beliefs if with_beliefs else NO_BELIEFS, with_beliefs)
             change, per_tile = self._pass_change(cb, True, sparse)
             confirm = False

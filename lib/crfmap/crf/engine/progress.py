@@ -1,10 +1,8 @@
 """Watching a long LBP run: the iteration loops report each pass to whoever asked, inside a :func:`watch` block.
 
-A run with ``tol=0`` (or a large ``max_iter`` on a grid that does not settle) iterates until ``max_iter``: that
-limit is the user's choice, so the run is not cut short; it can be watched (``crfmap infer`` shows a bar on a
-terminal) and stopped (Ctrl-C ends it between passes: nothing is written). The loops
-(:meth:`crfmap.crf.engine.packed.PackedBlock.run`, :func:`crfmap.crf.inference.schedules.run_schedule`) call
-:func:`passed` after every pass; outside a :func:`watch` block that is one context-variable read.
+A run that does not settle iterates until the user's ``max_iter``; it can be watched (``crfmap infer`` shows a bar on
+a terminal) and stopped (Ctrl-C ends it between passes). The loops call :func:`passed` after every pass; outside a
+:func:`watch` block that is one context-variable read.
 
 >>> seen = []
 >>> with watch(lambda done, limit, change: seen.append((done, limit))):

@@ -1,19 +1,14 @@
 """The fast engine's one entry, :func:`solve`: pack a grid, iterate checkerboard LBP, unpack the result.
 
-Whole grid from uniform messages (the common call) costs one trip through memory before the iterations:
-:meth:`crfmap.crf.engine.packed.PackedBlock.start_uniform` reads the observations once and writes the observation
-odds and only the message slots at the grid's edges (the first pass sends the red cells' first half-sweep from the
-odds alone, so no message plane is filled or read before it is written), and counts on the way the cells a caller's
-grid check and the hard evidence need (:func:`fused_start_applies`). Warm starts, hard evidence and regions take the
-general path: uniform planes, then the unary, messages, clamps or the region's box (bounded LBP packs only the
-bounding box of the region plus a one-cell halo, the receivers). A region from uniform messages without hard
-evidence (every preset's call) packs only that box too, but builds no whole-grid message array: its beliefs come
-from the packed planes (outside the box, the floored observation) and its messages are unpacked when first read. In
-float64 with a tol of at least :data:`MIXED_MIN_TOL` it iterates in float32 first
-(:meth:`~crfmap.crf.engine.packed.PackedBlock.widened`): float32 passes run about 1.4x faster, and float64
-iterations from their messages then run until an iteration of every cell moves no message by tol, the same stopping
-rule, so the result is a float64 iteration converged to tol (it differs from a float64-only run by about tol, as two
-runs stopped at tol from different starts do).
+Three paths. The whole grid from uniform messages (the common call) is packed in one trip through memory
+(:meth:`~crfmap.crf.engine.packed.PackedBlock.start_uniform`), which also checks the grid and finds hard evidence on
+the way (:func:`fused_start_applies`). A region from uniform messages without hard evidence (every preset's call)
+packs only the region's bounding box plus a one-cell halo (the receivers) and builds no whole-grid message array:
+outside the box the belief is the floored observation, and the messages are unpacked when first read; in float64
+with tol >= :data:`MIXED_MIN_TOL` it iterates in float32 first (faster), then in float64 from those messages until an
+iteration of every cell moves no message by tol, the same stopping rule (the result differs from a float64-only run
+by about tol, as two runs stopped at tol from different starts do). Warm starts, hard evidence and other regions take
+the general path: uniform planes, then the unary, messages, clamps or the region's box.
 """
 from __future__ import annotations
 
@@ -34,7 +29,6 @@ MIXED_MIN_TOL = 1e-6  # float32 resolves message changes to ~1e-8 in P: far belo
 
 
 class EngineResult(NamedTuple):
-    """What :func:`solve` returns."""
 
     beliefs: np.ndarray  # float64 [y, x] P(occupied), certain cells not yet set to their state
     messages: np.ndarray | Callable  # (4, H, W) probability messages, or a function unpacking them on first read
@@ -44,9 +38,8 @@ class EngineResult(NamedTuple):
 
 
 def fused_start_applies(grid, tables, max_iter, block, region, messages) -> bool:
-    """Whether :func:`solve` may pack ``grid`` in one trip (:meth:`PackedBlock.start_uniform`) and check it on the way:
-    a C-ordered float64 2-D array, whole grid, uniform start, a first pass of >= 2 iterations,
-    and tables under which no observation-free certainty exists."""
+    """Whether :func:`solve` may pack ``grid`` in one trip and check it on the way: a C-ordered float64 2-D array, whole
+    grid, uniform start, a first pass of >= 2 iterations, tables under which no observation-free certainty exists."""
     return (isinstance(grid, np.ndarray) and grid.dtype == np.float64 and grid.ndim == 2 and grid.size > 0
             and grid.flags.c_contiguous and region is None and messages is None and min(max_iter, block) >= 2
             and not np.any(forced_states(tables) == -2))
@@ -54,14 +47,12 @@ def fused_start_applies(grid, tables, max_iter, block, region, messages) -> bool
 
 def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, messages=None, states=None,
           fused=False, block=PASS_ITERATIONS, freeze=None, floor=MESSAGE_FLOOR) -> EngineResult:
-    """Checkerboard LBP on the fast kernels.
+    """Checkerboard LBP on the fast kernels, as :func:`crfmap.crf.inference.lbp.infer` calls it.
 
-    ``prob``: float64 [y, x] observations; ``tables``: the four directional tables; ``region``: the senders or None
-    (whole grid); ``messages``: a warm start or None; ``states``: the certain cells
-    (:mod:`crfmap.crf.model.evidence`) or None; ``block``, ``freeze``: as in
-    :meth:`crfmap.crf.engine.packed.PackedBlock.run`. With ``fused`` (see :func:`fused_start_applies`; ``states``
-    not computed yet) ``prob`` is checked here: a bad grid raises :class:`crfmap.errors.InputError`, certain cells
-    take the general path, and the returned ``states`` are the ones found.
+    ``prob``: float64 [y, x] observations; ``tables``: the four directional tables; ``region``: the senders or None;
+    ``messages``: a warm start or None; ``states``: the certain cells or None; ``block``, ``freeze``: as in
+    :meth:`~crfmap.crf.engine.packed.PackedBlock.run`. With ``fused`` (``states`` not computed yet) a bad ``prob``
+    raises :class:`crfmap.errors.InputError`, and the returned ``states`` are the certain cells found.
     """
     shape = prob.shape
     t = [time.perf_counter()]
@@ -128,8 +119,8 @@ def _whole_block(prob, tables, link, floor, messages, dtype, threads, states, fu
 
 
 def _packed_box(prob, tables, link, floor, active, dtype):
-    """(the packed box of the senders plus a one-cell halo (their receivers), filled with uniform messages and
-    holding the box's observations and senders; the box (y0, y1, x0, x1)), or (None, None) if no cell sends."""
+    """(the packed box of the senders plus a one-cell halo, with uniform messages, the box's observations and
+    senders; the box (y0, y1, x0, x1)), or (None, None) if no cell sends."""
     rows = np.flatnonzero(active.any(axis=1))
     if not rows.size:
         return None, None
@@ -143,12 +134,8 @@ def _packed_box(prob, tables, link, floor, active, dtype):
 
 
 def _bounded_uniform_block(prob, tables, link, floor, active, dtype):
-    """Bounded LBP from uniform messages without hard evidence: (the beliefs outside the senders' box, the packed
-    box ready to iterate or None if no cell sends, the box (y0, y1, x0, x1)).
-
-    Only the box is packed (:func:`_packed_box`): outside it every message stays uniform, so a cell's belief
-    there is its floored observation.
-    """
+    """Bounded LBP from uniform messages without hard evidence: (the beliefs outside the senders' box, which are the
+    floored observations, the packed box or None if no cell sends, the box (y0, y1, x0, x1))."""
     beliefs = link_unary(prob, link)
     np.clip(beliefs, floor, 1.0 - floor, out=beliefs)
     return (beliefs,) + _packed_box(prob, tables, link, floor, active, dtype)

@@ -1,14 +1,10 @@
 """Reusable buffers for :func:`crfmap.crf.inference.lbp.infer` on large grids: no fresh memory per call.
 
-Writing into freshly allocated memory costs a page fault per page (in a virtual machine far more than the write
-itself): on large grids an ``infer`` call spent longer faulting its buffers in than iterating. The whole-grid fast
-path therefore takes its packed planes (20 bytes per cell in float32) and its float64 beliefs (8) from here: the
-buffers of the last call of that shape and dtype when nothing else holds them any more (the previous result was
-dropped), else new ones. Between calls the buffers of the last large grid stay allocated; :func:`release_workspace`
-frees them. Grids under :data:`WORKSPACE_MIN_CELLS` always get new ones.
-
-A buffer counts as free when only this module refers to it (Python reference count): a result
-whose beliefs or (still packed) messages someone keeps, even through a view, keeps its buffers.
+Writing into freshly allocated memory costs a page fault per page: on large grids an ``infer`` call spent longer
+faulting its buffers in than iterating. The whole-grid fast path therefore takes its packed planes and its beliefs
+from here: the buffers of the last call of that shape and dtype when nothing else holds them (Python reference
+count: a result kept, even through a view, keeps its buffers), else new ones. The last large grid's buffers stay
+allocated until :func:`release_workspace`; grids under :data:`WORKSPACE_MIN_CELLS` always get new ones.
 
 >>> a = beliefs_buffer((2048, 1024)); b = beliefs_buffer((2048, 1024))
 >>> a is b  # the first is still held (by ``a``)
