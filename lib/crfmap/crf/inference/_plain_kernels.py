@@ -1,16 +1,9 @@
 """The plain schedules' message updates: numba kernels of LBP on a 4-connected binary lattice (private).
 
-Data layout (checked and prepared by :mod:`crfmap.crf.inference.schedules`):
-
-- ``unary[y, x]``: P(occupied) the observed layer tells each hidden cell, floored.
-- ``msg[d, y, x]``: the message arriving at cell (y, x) that travelled in direction d (0 east-bound, i.e. from the
-  west neighbour; 1 west-bound, from the east; 2 north-bound, from the south; 3 south-bound, from the north), stored
-  as P(receiver occupied). A slot with no neighbour behind it stays 0.5 for ever (a uniform message).
-- ``coef[d]``: (oo, oe, oo + eo, oe + ee) of the table used by messages travelling in d.
-- ``active[y, x]``: cells allowed to send (bounded LBP); ``use_active`` False ignores it.
-
-A binary message is one number, so one update is one division: ``m = (oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)``
-with A, B the sender's cavity weights. Every kernel returns the largest change of any message it wrote.
+``unary[y, x]``: the floored P(occupied) the observed layer tells each hidden cell; ``msg``: the layout of
+:mod:`crfmap.crf.engine.messages`; ``coef[d]``: :func:`crfmap.crf.model.potentials.message_coefficients`, one
+division an update; ``active[y, x]``: cells allowed to send (``use_active`` False ignores it). Every kernel returns
+the largest change of any message it wrote.
 """
 from __future__ import annotations
 
@@ -65,8 +58,7 @@ def _send_all(y, x, unary, src, dst, coef, floor, damping):
     return change
 
 
-# Kernels over a band of rows (or columns) take it as [r0, r1) last and release the GIL: the
-# schedules run the bands on threads (crfmap.crf.threads.over_rows), a barrier between half-sweeps.
+# Kernels over a band of rows (or columns) take it as [r0, r1) last and release the GIL, for over_rows.
 
 
 @njit(nogil=True, cache=True)

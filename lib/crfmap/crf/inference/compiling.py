@@ -1,9 +1,8 @@
-"""Say so when numba starts compiling kernels (an empty cache: tens of seconds of silence otherwise),
-and measure how long compiling took, so it is never reported as the time of the work itself.
+"""Say so when numba starts compiling kernels (an empty cache: tens of seconds of silence otherwise), and measure how
+long compiling took, so it is never reported as the time of the work itself.
 
-Both listen to numba's event API (:mod:`numba.core.event`, in numba's developer manual): "numba:compile"
-fires only while a kernel is compiled, never when it is loaded from the disk cache; "numba:compiler_lock"
-around both. So the note is printed when compiling really starts, and needs no look into numba's cache.
+Both listen to numba's event API (:mod:`numba.core.event`): "numba:compile" fires only while a kernel is compiled,
+never when it is loaded from the disk cache; "numba:compiler_lock" around both.
 
 >>> import io
 >>> with announcing(io.StringIO()) as note, compile_timer() as compiled:
@@ -40,10 +39,7 @@ class Announcer(event.Listener):
 
 @contextlib.contextmanager
 def announcing(stream=None):
-    """Print :data:`MESSAGE` (``stream``, default stderr) once if numba compiles a kernel inside the block.
-
-    A warm cache (kernels loaded, or compiled already in this process) says nothing; ``.said`` tells.
-    """
+    """Print :data:`MESSAGE` (``stream``, default stderr) once if numba compiles a kernel inside the block (``.said``)."""
     announcer = Announcer(stream)
     with event.install_listener("numba:compile", announcer):
         yield announcer
@@ -70,12 +66,8 @@ class CompileTime(event.Listener):
 
 @contextlib.contextmanager
 def compile_timer(loading=True):
-    """Measure the time numba spends on kernels inside the block (``.seconds``).
-
-    ``loading`` True: the time it holds its compiler lock, compiling kernels or loading them from the
-    disk cache (all time that is not the work itself); False: compiling only. Nested timers each see
-    the whole time of their own block.
-    """
+    """Measure the time numba spends on kernels inside the block (``.seconds``): compiling them or (``loading``)
+    loading them from the disk cache too. Nested timers each see the whole time of their own block."""
     timer = CompileTime()
     with event.install_listener("numba:compiler_lock" if loading else "numba:compile", timer):
         yield timer

@@ -2,23 +2,17 @@
 
 The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one observed node per cell
 holding the grid's P(occupied), which sends its hidden node one message through ``link``. :func:`infer` checks its
-input, finds the hard evidence (:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on
-the schedule asked for (:mod:`crfmap.crf.inference.schedules`) and returns the beliefs P(occupied) as a grid plus
-the convergence diagnostics (:class:`~crfmap.crf.inference.result.LBPResult`).
+input, clamps hard evidence (:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on the
+schedule asked for and returns the beliefs with the convergence diagnostics
+(:class:`~crfmap.crf.inference.result.LBPResult`).
 
-Kernels: the checkerboard schedule (without damping) runs on the fast engine of :mod:`crfmap.crf.engine`
-(:func:`crfmap.crf.engine.solve.solve`): messages as odds ratios in red/black planes, float32 SIMD, several
-iterations per trip through memory. It gives the plain kernel's iterations (to rounding) but measures the largest
-message change only on the last iteration of each pass of up to ``block`` iterations (passes grow 1, 2, 4, ... so a
-warm start still stops at once); the other entries of ``max_change`` are NaN, and a run may do up to ``block - 1``
-iterations more than the plain kernel before it sees ``tol``. On large grids, settled tiles pause
-(``Checkerboard(freeze=...)``). The other schedules, and ``Checkerboard(kernel="plain")``, run the plain kernels of
-:mod:`crfmap.crf.inference._plain_kernels`.
+The checkerboard schedule without damping runs on the fast engine (:mod:`crfmap.crf.engine`): the plain kernel's
+iterations to rounding, but the message change is measured only on the last iteration of each pass of up to
+``block`` iterations, so a run may do some iterations more before it sees ``tol``. The other schedules, and
+``Checkerboard(kernel="plain")``, run the plain kernels (:mod:`crfmap.crf.inference.schedules`).
 
-Bounded LBP (sec. 3.4.4): pass ``region`` (a boolean [y, x] mask, e.g. from
-:func:`crfmap.crf.inference.regions.disc_region`): only cells in it send messages; every other
-message keeps its value (warm-start ``messages`` to carry them between calls). Cells outside a
-region never influence anything unless they sent messages before.
+Bounded LBP (sec. 3.4.4): with ``region`` (e.g. :func:`crfmap.crf.inference.regions.disc_region`) only the cells in
+it send; every other message keeps its value (warm-start ``messages`` to carry them between calls).
 """
 from __future__ import annotations
 
@@ -88,10 +82,8 @@ def check_float_dtype(dtype) -> np.dtype:
 def warn_near_certain(probability, name: str = "grid") -> int:
     """Warn (once per call) when cells have P within :data:`MESSAGE_FLOOR` of 0 or 1 without being 0 or 1; their count.
 
-    LBP keeps observations in [MESSAGE_FLOOR, 1 - MESSAGE_FLOOR] (float32's range; :mod:`crfmap.crf.engine.messages`),
-    so such a cell is read as MESSAGE_FLOOR away from certain: the result is LBP's on the clipped grid, which under a
-    strong coupling can differ from the unclipped model's by far more than the floor. Exactly 0 or 1 is hard
-    evidence and is exact. Costs a min and a max on the common grid (0.7 ms on 1.5 M cells).
+    LBP reads such a cell as MESSAGE_FLOOR away from certain, which under a strong coupling can change the result by
+    far more than the floor; exactly 0 or 1 is hard evidence, and exact.
 
     >>> warn_near_certain(np.array([[0.0, 0.3, 1.0]]))
     0
@@ -125,24 +117,15 @@ def infer(
     """Run loopy belief propagation on a grid's CRF; returns an :class:`LBPResult`.
 
     ``grid``: an OccupancyGrid or a 2-D array of P(occupied) in [0, 1], indexed [y, x]. ``hidden``, ``link``: 2x2
-    tables (rows C1 C0, columns N1 N0; :mod:`crfmap.crf.model.potentials`). ``schedule``: ``"checkerboard"``,
-    ``"flooding"``, ``"sweep"``, ``"thesis"``, or their settings (:class:`~crfmap.crf.inference.schedules.Checkerboard`
-    ``(kernel, damping, block, freeze)``, ``Flooding(damping)``, ``Sweep(damping)``, ``Thesis(start, damping)``):
-    options that apply to one schedule only live in its settings. Iterations stop after ``max_iter`` (the thesis used 2
-    with ``schedule="thesis"``) or once the largest message change of an iteration is below ``tol``. ``region``: a
-    boolean [y, x] mask of the cells that send messages (bounded LBP). ``messages``: a (4, H, W) warm start (e.g.
-    ``previous_result.messages``). ``pairing``: ``"receiver"`` (thesis) or ``"oriented"`` (a proper pairwise CRF for
-    non-symmetric tables). ``threads``: numba threads for the parallel schedules (None: numba's default).
-
-    ``dtype`` np.float64 or np.float32: bounded LBP from uniform messages in float64 with ``tol`` >= 1e-6 (every
-    preset's call) iterates in float32 until tol, then in float64 until an iteration moves no message by tol
-    (:mod:`crfmap.crf.engine.solve`): a float64 result, about 1.4x faster.
-
-    ``init``: the start messages when ``messages`` is None: ``"uniform"``, or ``"coarse"``-to-fine
-    (:mod:`crfmap.crf.inference.multiscale`: the grid halved recursively, each level solved with these arguments and
-    its messages upsampled as the next level's warm start). Same fixed point where LBP has one; in the ordered phase
-    it may reach another. ``seconds`` includes the coarse levels (also ``timings["coarse"]``); ``iterations`` counts
-    the full grid's only.
+    tables (:mod:`crfmap.crf.model.potentials`). ``schedule``: a name (``"checkerboard"``, ``"flooding"``,
+    ``"sweep"``, ``"thesis"``) or its settings (:mod:`crfmap.crf.inference.schedules`). Iterations stop after
+    ``max_iter`` (the thesis used 2 with ``schedule="thesis"``) or once an iteration's largest message change is below
+    ``tol``. ``region``: a boolean [y, x] mask of the senders (bounded LBP). ``messages``: a (4, H, W) warm start
+    (e.g. ``previous_result.messages``). ``pairing``: ``"receiver"`` (thesis) or ``"oriented"``. ``threads``: None
+    for numba's default. ``dtype``: np.float64 or np.float32 (bounded LBP in float64 iterates in float32 first:
+    :mod:`crfmap.crf.engine.solve`). ``init``: ``"uniform"`` start messages or ``"coarse"``-to-fine
+    (:mod:`crfmap.crf.inference.multiscale`; ``seconds`` includes the coarse levels, ``iterations`` counts the full
+    grid's only).
 
     >>> r = infer(np.array([[0.9, 0.5, 0.9]]), max_iter=50, tol=1e-9)
     >>> bool(r.beliefs.probability[0, 1] > 0.5), r.converged
@@ -174,7 +157,6 @@ def infer(
     if settings.uses_engine and settings.kernel == "fast" and not use_fast:
         raise InputError("kernel", "the fast kernels need east/north and west/south to share a table")
     block = PASS_ITERATIONS if getattr(settings, "block", None) is None else settings.block
-    # the common call (a float64 array, whole grid, uniform start) is checked while it is packed
     given = isinstance(grid, OccupancyGrid)  # checked when made; an array is checked while packed (fused)
     fused = use_fast and init == "uniform" and engine.fused_start_applies(
         grid.probability if given else grid, tables, max_iter, block, region, messages)

@@ -1,19 +1,12 @@
 """Coarse-to-fine start for LBP: solve a 2x downsampled grid, upsample its messages as the warm start.
 
-``infer(grid, init="coarse")`` (:func:`crfmap.crf.inference.lbp.infer`) halves the grid (the log-odds of P(occupied)
-of each 2x2 block summed: the block's evidence as one cell's) recursively down to about :data:`COARSE_MIN_SIDE`
-cells a side, runs LBP there from uniform messages, and hands every finer level the coarser level's converged
-messages, each fine cell taking the message its coarse cell received from the same direction.
+``infer(grid, init="coarse")`` halves the grid recursively (:func:`downsample`) down to about
+:data:`COARSE_MIN_SIDE` cells a side, runs LBP there from uniform messages, and hands every finer level the coarser
+level's converged messages, each fine cell taking the message its coarse cell received from the same direction.
 
-What it is and is not (measured in ``tests/crf/test_multiscale.py``, the ``converge-start`` row of
-``crfmap bench`` and notebook 09; the numbers live there):
-
-- Where LBP has a single fixed point (weak couplings such as [[2, 1], [1, 2]] or the certainty
-  preset's J = 0.35), the start changes only the path: the beliefs equal the uniform start's.
-- In the ordered phase ([[10, 1], [1, 10]]) LBP has several fixed points and the start picks one: on the noisy
-  office floor the coarse start reaches one with nearly all cells on the same side of 0.5 as the uniform start's, in
-  fewer fine iterations, but the coarse levels cost more than they save. The mean of P as the coarse observation
-  (tried first) reaches the all-empty fixed point (the walls gone), so it is not used.
+Where LBP has a single fixed point (couplings below critical) the start changes only the path, not the beliefs. In
+the ordered phase LBP has several fixed points and the start picks one (``crfmap bench``'s ``converge-start`` row and
+notebook 09 measure what it costs and saves).
 
 >>> import numpy as np
 >>> downsample(np.array([[0.0, 1.0, 0.9], [1.0, 0.0, 0.5]])).round(3).tolist()
@@ -32,12 +25,10 @@ INITS = ("uniform", "coarse")
 
 
 def downsample(probability) -> np.ndarray:
-    """Each 2x2 block's evidence combined as one cell's: P whose log-odds is the sum of the four cells'.
-
-    (As if the block were one spin, the strong-coupling limit; the mean of P instead washes thin
-    walls out, and the ordered phase then settles the fine grid on an all-empty fixed point.)
-    Shape (ceil(H / 2), ceil(W / 2)); an odd last row / column is counted twice. P is
-    clipped to [PROBABILITY_FLOOR, 1 - PROBABILITY_FLOOR] first, so hard evidence stays finite.
+    """Each 2x2 block's evidence as one cell's: P whose log-odds is the sum of the four cells' (P clipped to
+    [PROBABILITY_FLOOR, 1 - PROBABILITY_FLOOR] first), shape (ceil(H / 2), ceil(W / 2)); an odd last row or column
+    counts twice. The block as one spin, the strong-coupling limit: the mean of P instead washes thin walls out, and
+    the ordered phase then settles the fine grid on an all-empty fixed point.
     """
     p = np.clip(np.asarray(probability, dtype=np.float64), PROBABILITY_FLOOR, 1.0 - PROBABILITY_FLOOR)
     h, w = p.shape
@@ -62,12 +53,8 @@ def levels(shape, min_side=COARSE_MIN_SIDE) -> int:
 
 
 def coarse_messages(probability, solve, min_side=COARSE_MIN_SIDE):
-    """Warm-start messages for ``probability`` from its coarser levels, or None if it is too small to halve.
-
-    ``solve(probability, messages)`` runs LBP on one level (``messages`` None: uniform start)
-    and returns its result (an :class:`crfmap.crf.inference.result.LBPResult`). Returns (messages, the
-    coarse levels' results, coarsest first).
-    """
+    """(warm-start messages for ``probability`` from its coarser levels or None if it is too small to halve, the
+    coarse levels' results, coarsest first); ``solve(probability, messages)`` runs LBP on one level."""
     n = levels(np.shape(probability), min_side)
     if n == 0:
         return None, []

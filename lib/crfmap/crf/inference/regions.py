@@ -26,10 +26,8 @@ def disc_region(grid, center, radius) -> np.ndarray:
 def near_known(grid, margin: int) -> np.ndarray:
     """Boolean [y, x] mask of cells within ``margin`` cells (Chebyshev distance) of an observed cell.
 
-    With the default coupling the CRF is in its ordered phase: a large never-observed area far
-    from any observation does not stay at 0.5 under LBP but takes the state of its border. Passing
-    this mask as ``region`` (and keeping the input outside it) fills gaps and occlusions up to
-    ``margin`` cells deep and leaves the unexplored outside unknown.
+    As ``region`` (keeping the input outside it) it fills gaps up to ``margin`` cells deep and leaves the unexplored
+    outside unknown, which in the ordered phase would otherwise take the state of its border.
 
     >>> m = near_known(np.array([[0.5, 0.5, 0.5, 0.9]]), 1)
     >>> m.astype(int).tolist()
@@ -39,8 +37,7 @@ def near_known(grid, margin: int) -> np.ndarray:
 
 
 def near_cells(mask, margin: int) -> np.ndarray:
-    """Boolean [y, x] mask of cells within ``margin`` cells (Chebyshev distance) of a True cell of ``mask``
-    (:func:`near_known` of a grid whose observed cells are ``mask``).
+    """Boolean [y, x] mask of cells within ``margin`` cells (Chebyshev distance) of a True cell of ``mask``.
 
     >>> near_cells(np.array([[False, False, False, True]]), 2).astype(int).tolist()
     [[0, 1, 1, 1]]

@@ -11,43 +11,26 @@ from crfmap.grid import OccupancyGrid
 
 @dataclass
 class LBPResult:
-    """What :func:`infer` returns.
+    """What :func:`infer` returns (``max_change`` is NaN where the fast kernel did not measure it)."""
 
-    - ``beliefs``: P(occupied) of every hidden cell, with the input grid's metadata.
-    - ``iterations``: iterations done (one iteration updates every message once; for ``"thesis"`` one pass).
-    - ``max_change``: the largest message change at every iteration (length ``iterations``); NaN where the fast kernel
-      did not measure it (it measures the last iteration of each block).
-    - ``converged``: whether the last change fell below ``tol``.
-    - ``messages``: the final messages, shape (4, H, W); pass them back as ``messages=`` to warm-start. The whole-grid
-      fast kernel unpacks them on first read (most callers never do).
-    - ``seconds``: wall time of the inference, without the time numba spent compiling kernels or loading them from
-      its disk cache (a first call's wait: ``timings["compile"]``).
-    - ``kernel``: ``"fast"`` or ``"plain"``: which kernels ran.
-    - ``timings``: seconds spent packing ("pack"), iterating ("iterate") and unpacking beliefs and messages ("unpack")
-      on the whole-grid fast kernel, and on the coarse levels of ``init="coarse"`` ("coarse"); "compile": seconds
-      numba spent compiling or loading kernels during the call (not in ``seconds``; absent when none); "pack" and
-      "iterate" include it.
-    - ``gated``: a preset's beliefs moved by its evidence gate into the nav2 class each cell's own evidence allows
-      (:meth:`crfmap.crf.model.gating.EvidenceGate.beliefs_and_map`); None when no gate ran. Read it as :attr:`nav2_map`.
-    """
-
-    beliefs: OccupancyGrid
-    iterations: int
-    max_change: np.ndarray
-    converged: bool
-    messages: np.ndarray = field(repr=False)
-    seconds: float = 0.0
+    beliefs: OccupancyGrid  # P(occupied) of every hidden cell, with the input grid's metadata
+    iterations: int  # each updates every message once (for "thesis": one pass)
+    max_change: np.ndarray  # the largest message change of every iteration
+    converged: bool  # whether the last change fell below tol
+    messages: np.ndarray = field(repr=False)  # (4, H, W); pass back as messages= to warm-start; unpacked when read
+    seconds: float = 0.0  # wall time, without numba's compiling or cache loading (timings["compile"])
     schedule: str = "checkerboard"
-    kernel: str = "plain"
+    kernel: str = "plain"  # "fast" or "plain": which kernels ran
+    # seconds spent packing, iterating, unpacking ("pack", "iterate", "unpack"; whole-grid fast kernel), on the coarse
+    # levels ("coarse"), and compiling or loading kernels ("compile", within "pack" and "iterate"; absent when none)
     timings: dict = field(default_factory=dict)
+    # a preset's beliefs moved by its evidence gate into the nav2 class each cell's evidence allows (None: no gate)
     gated: OccupancyGrid | None = field(default=None, repr=False)
 
     @property
     def nav2_map(self) -> OccupancyGrid:
         """The map to hand nav2 (write as a map_server map, publish on /map): the gated beliefs, else the beliefs.
-
-        :attr:`beliefs` are the probabilities (score them, fuse them); this is the decision nav2 reads from them.
-        """
+        :attr:`beliefs` are the probabilities (score them, fuse them); this is the decision nav2 reads."""
         return self.beliefs if self.gated is None else self.gated
 
     @property

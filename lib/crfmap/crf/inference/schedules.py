@@ -2,18 +2,16 @@
 
 Pass one as ``infer(grid, schedule=...)``: a name (its settings' defaults) or a settings object.
 
-- :class:`Checkerboard` (``"checkerboard"``, the default): red cells send, then black cells.
-  Parallel, in place, and in our runs convergent where flooding oscillates. Runs on the fast
-  engine (:mod:`crfmap.crf.engine`) unless ``kernel="plain"`` or ``damping`` asks for the plain one.
-- :class:`Flooding` (``"flooding"``): every message from the previous iteration's messages
-  (synchronous). Can oscillate on strong couplings; ``damping`` tames it.
+- :class:`Checkerboard` (``"checkerboard"``, the default): red cells send, then black cells; parallel, in place.
+  Runs on the fast engine (:mod:`crfmap.crf.engine`) unless ``kernel="plain"`` or ``damping`` asks for the plain one.
+- :class:`Flooding` (``"flooding"``): every message from the previous iteration's (synchronous). Can oscillate on
+  strong couplings; ``damping`` tames it.
 - :class:`Sweep` (``"sweep"``): four directional sweeps (thesis sec. 2.6.2): information crosses the grid per sweep.
-- :class:`Thesis` (``"thesis"``): breadth-first from a corner cell, each visited cell pulling
-  fresh messages from its neighbours, in place (Listing 5); every iteration restarts from the
-  last cell visited (sec. 2.6.2). ``max_iter=2`` is the thesis's setting. One thread.
+- :class:`Thesis` (``"thesis"``): breadth-first from a corner cell, each visited cell pulling fresh messages from its
+  neighbours, in place (Listing 5); every iteration restarts from the last cell visited. One thread.
 
-``damping`` (0..1, the weight of the old message) applies to the plain kernels. An option given
-to a schedule or kernel it does not apply to is refused (:class:`crfmap.errors.InputError`).
+``damping`` (in [0, 1), the weight of the old message) applies to the plain kernels. An option given to a schedule
+or kernel it does not apply to is refused (:class:`crfmap.errors.InputError`).
 
 >>> Thesis(start="upper-left").name, Checkerboard().uses_engine
 ('thesis', True)
@@ -44,26 +42,16 @@ def _check_damping(damping):
 
 @dataclass(frozen=True)
 class Checkerboard:
-    """Red cells send, then black ones.
+    """Red cells send, then black ones. ``block`` and ``freeze`` apply to the fast engine only; a run ends only after
+    an iteration of every cell moved no message by ``tol``."""
 
-    kernel : "auto" (the fast engine unless ``damping``), "fast" or "plain"
-    damping : plain kernel only
-    block : int or None
-        Fast engine only: at most this many iterations per trip through memory (None:
-        :data:`crfmap.crf.engine.packed.PASS_ITERATIONS`); the message change is measured on the
-        last iteration of each pass, the others are NaN in ``max_change``.
-    freeze : float or None
-        Fast engine only: tiles (:data:`~crfmap.crf.engine.packed.TILE_ROWS` x
-        :data:`~crfmap.crf.engine.packed.TILE_COLS` cells) whose messages moved by at most this
-        stop iterating until a neighbouring tile moves; None means
-        :data:`~crfmap.crf.engine.packed.FREEZE` ``* tol``, 0 freezes only tiles that did not
-        move at all (exactly the plain iterations). Must be below ``tol`` (checked by ``infer``).
-        A run ends only after an iteration of every cell moved no message by ``tol``.
-    """
-
-    kernel: str = "auto"
-    damping: float = 0.0
+    kernel: str = "auto"  # "auto" (the fast engine unless damping), "fast" or "plain"
+    damping: float = 0.0  # plain kernel only
+    # iterations per trip through memory at most (None: crfmap.crf.engine.packed.PASS_ITERATIONS); the message
+    # change is measured on the last of each pass, the others are NaN in max_change
     block: int | None = None
+    # tiles whose messages moved by at most this pause until a neighbouring tile moves (None: packed.FREEZE * tol;
+    # 0: only tiles that did not move at all, exactly the plain iterations); below tol
     freeze: float | None = None
     name = "checkerboard"
 
@@ -141,7 +129,7 @@ def schedule_settings(schedule):
 
 @dataclass
 class _PlainRun:
-    """What a plain schedule's iteration works on (one call of :func:`run_schedule`)."""
+    """What a plain schedule's iteration works on."""
 
     unary: np.ndarray
     msg: np.ndarray
@@ -203,9 +191,7 @@ def _thesis_iteration(settings, r):
     return c
 
 
-# The registry of plain schedules: name -> one iteration (which runs the schedule's kernels). SETTINGS, the CLI's
-# choices and the study's warm-up are read from here and SETTINGS: a new schedule is its settings class, one entry
-# here, and its kernels.
+# name -> one iteration of the plain schedule: a new schedule is its settings class, one entry here, and its kernels
 PLAIN_RUNNERS = {
     "checkerboard": _checkerboard_iteration,
     "flooding": _flooding_iteration,
@@ -238,7 +224,7 @@ def run_schedule(settings, probability, tables, link, max_iter, tol, senders, me
     for _ in range(max_iter):
         c = iteration(settings, run)
         changes.append(float(c))
-        passed(len(changes), max_iter, c)  # a watcher's bar (crfmap.crf.engine.progress)
+        passed(len(changes), max_iter, c)
         if c < tol:
             break
     return beliefs_from_messages(unary, msg), msg, changes
