@@ -1,12 +1,9 @@
 """Where numba keeps crfmap's compiled kernels when the package folder is read-only.
 
-crfmap's kernels use ``@numba.njit(cache=True)``. Numba caches next to the source (``__pycache__``), else in the
-user's ``~/.cache/numba``; where neither is writable (a system-wide or container install used by another user, a
-read-only home) it raises "cannot cache function ...: no locator available" at the first call. :func:`configure`,
-called by :func:`crfmap.environment.prepare` (the entry points, or a library user): if ``$NUMBA_CACHE_DIR`` is unset
-and the package's ``__pycache__`` folders are not writable, it points ``NUMBA_CACHE_DIR`` at the first writable
-folder of ``$XDG_CACHE_HOME/crfmap/numba`` (``~/.cache/crfmap/numba``) and ``<tempdir>/crfmap-numba-<uid>``. A set
-``$NUMBA_CACHE_DIR`` is never changed.
+Numba caches ``@njit(cache=True)`` kernels next to the source (``__pycache__``), else in ``~/.cache/numba``; where
+neither is writable (a system-wide or container install, a read-only home) it raises "cannot cache function ...: no
+locator available" at the first call. :func:`configure` (called by :func:`crfmap.environment.prepare`) then points an
+unset ``NUMBA_CACHE_DIR`` at the first writable folder of :func:`fallback_dirs`; a set one is never changed.
 """
 from __future__ import annotations
 

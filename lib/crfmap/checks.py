@@ -1,8 +1,5 @@
-"""Checked inputs: the one place where a user-supplied scalar or a pair of grids is validated.
-
-Every public function that takes a number from a user (a resolution, a noise bound, a seed, a count) or an observed
-grid with its truth checks it here, so the errors read the same everywhere: ``InputError(name, what is wrong)``.
-Domain checks (a scene variant, a potential table's layout) stay with their domain.
+"""Checked inputs: numbers, masks, paths and sizes a user gives, so the errors read the same everywhere
+(``InputError(name, what is wrong)``). Domain checks (a scene variant, a potential table's layout) stay with their domain.
 """
 from __future__ import annotations
 
@@ -66,10 +63,8 @@ def check_int(name, value, low=None, high=None) -> int:
 
 
 def check_mask(name, mask, shape=None) -> np.ndarray:
-    """``mask`` as a boolean array (2-D, of ``shape`` when given); InputError naming ``name`` for another dtype.
-
-    A mask of floats or integers would be read by truth value (0.3 and 2 both True): P(occupied) or a label
-    image passed where cells are chosen, silently choosing almost every cell. Say which cells: ``p > 0.5``.
+    """``mask`` as a boolean array (2-D, of ``shape`` when given); InputError naming ``name`` for another dtype: read by
+    truth value, P(occupied) or a label image passed where cells are chosen would choose almost every cell.
 
     >>> check_mask("region", np.full((2, 2), 0.3))
     Traceback (most recent call last):
@@ -108,9 +103,7 @@ MAX_TEXT_BYTES = 1 << 20  # a map YAML, sidecar or bag metadata.yaml is a few hu
 
 
 def max_cells() -> int:
-    """The largest grid (in cells) an input may ask for: ``$CRFMAP_MAX_CELLS`` or 100 million.
-
-    The value is a whole number >= 1 (``4e8`` too); there is no "no limit" (``inf`` is refused).
+    """The largest grid (in cells) an input may ask for: ``$CRFMAP_MAX_CELLS`` (no "no limit") or 100 million.
 
     >>> max_cells() >= 1
     True
@@ -160,9 +153,8 @@ def check_input_file(path, what, missing=None):
 
 
 def check_path_arg(path, what="file name", file=False):
-    """``path`` as a Path; InputError for anything that is not a str or os.PathLike (None, numbers, lists), and
-    (``file``) for a name ending in a path separator: ``Path("out.npy/")`` is ``out.npy``, and a write would
-    make the file a folder name promised not to be.
+    """``path`` as a Path; InputError for anything that is not a str or os.PathLike, and (``file``) for a name ending
+    in a path separator (``Path("out.npy/")`` is ``out.npy``: a write would make a file of a folder's name).
 
     >>> check_path_arg(None)
     Traceback (most recent call last):

@@ -1,7 +1,5 @@
-"""The ``crfmap`` command: one sub-command per module in :mod:`crfmap.commands`.
-
-Bad input ends the run with one line on stderr naming the input and the problem, and
-exit status 2; no traceback, no half-written output.
+"""The ``crfmap`` command: one sub-command per module in :mod:`crfmap.commands`. Bad input ends the run with one line on
+stderr naming the input and the problem, and exit status 2; no traceback, no half-written output.
 """
 from __future__ import annotations
 
@@ -53,7 +51,6 @@ def build_parser() -> argparse.ArgumentParser:
         cmd = module.add_parser(sub)
         cmd.set_defaults(_run=module.run)
     return parser
-
 
 
 def _os_error_line(exc: OSError, written=()) -> str:

@@ -1,8 +1,6 @@
-"""Where the public data recorded by others is read from (``$CRFMAP_DATA``, default ``../shared/data``).
-
-The data is never part of the project; a missing file's error says what to download and where.
-``CRFMAP_DATA`` names the folder; unset, it is ``shared/data`` beside the checkout that holds this package
-(``CRFMAP_ROOT`` names that checkout, as for the study's outputs).
+"""Where the public data recorded by others is read from: ``$CRFMAP_DATA``, else ``shared/data`` beside the checkout
+that holds this package (``$CRFMAP_ROOT``). The data is never part of the project; a missing file's error says what
+to download and where.
 """
 from __future__ import annotations
 
@@ -58,8 +56,6 @@ def data_file(relative: str) -> Path:
 def have_data(relative: str) -> bool:
     """Whether a public data file is present (tests skip, with a reason, when it is not)."""
     return (data_root() / relative).exists()
-
-
 
 
 def _checkout() -> Path:

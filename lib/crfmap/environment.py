@@ -14,17 +14,13 @@ variable               read by                          accepted
 ``OMP_WAIT_POLICY``    OpenMP (numba's parallel loops)  set to ``PASSIVE`` by :func:`prepare` unless set
 =====================  ===============================  ===========================================
 
-``OMP_WAIT_POLICY=PASSIVE``: OpenMP's threads otherwise spin for a while after each parallel loop,
-taking a core from the threads crfmap's other kernels run on (:mod:`crfmap.crf.threads`) and from
-a second notebook or process on the machine (measured: LBP on a 2048² grid 17 % faster, 2 cores).
+``OMP_WAIT_POLICY=PASSIVE``: OpenMP's threads otherwise spin after each parallel loop, taking a core from the threads
+crfmap's other kernels run on and from other processes on the machine.
 
 A folder variable set but empty is refused (an empty path would mean the working directory); an empty number
-variable means unset (the shell idiom ``VAR= command``), as numba reads its own. Numba reads ``NUMBA_NUM_THREADS``
-once, at its import, and then fails with a traceback (``0``) or ignores the value (``abc``): the entry points (the
-``crfmap`` command, the study's runners) call :func:`prepare` before anything imports numba, and so can a library
-user (``crfmap.prepare()``), to get crfmap's one-line :class:`~crfmap.errors.InputError` naming the variable
-instead. ``import crfmap`` itself changes nothing: no environment variable, no import hook, no file.
-``XDG_CACHE_HOME``, ``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only hints: a bad value falls back to the default.
+variable means unset (the shell idiom ``VAR= command``), as numba reads its own. ``import crfmap`` itself changes
+nothing; :func:`prepare` checks before numba reads them. ``XDG_CACHE_HOME``, ``JPY_SESSION_NAME`` and ``MPLBACKEND``
+are only hints: a bad value falls back to the default.
 """
 from __future__ import annotations
 
@@ -68,11 +64,8 @@ def folder(variable, default=None, must_exist=False) -> Path | None:
 
 
 def writable_folder(path, variable) -> Path:
-    """``path`` if a file can be created in it (or in its nearest existing parent, where it will be made).
-
-    Nothing is left behind: the probe is an unnamed temporary file. Errors name ``variable`` (the
-    setting that chose the folder) with its value, and the folder.
-    """
+    """``path`` if a file can be created in it (or in its nearest existing parent, where it will be made), probed with
+    an unnamed temporary file; errors name ``variable`` (the setting that chose the folder) with its value."""
     path = Path(path)
     given = os.environ.get(variable)
     source = _named(variable, given) if given else f"{path} (unset {variable}: its default)"
@@ -146,7 +139,7 @@ def usable_cores() -> int:
 
 
 def quiet_openmp_threads() -> None:
-    """``OMP_WAIT_POLICY=PASSIVE`` unless set: read by OpenMP when numba first starts its threads (see above)."""
+    """``OMP_WAIT_POLICY=PASSIVE`` unless set: read by OpenMP when numba first starts its threads."""
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 
@@ -201,10 +194,8 @@ def reproduce_started() -> float | None:
 
 
 def check(numba_cache_too=True) -> None:
-    """Check every variable an entry point depends on before it starts (InputError naming the first bad one).
-
-    The same checks as where each is read (:mod:`crfstudy.paths`, :func:`crfmap.checks.max_cells`, ...).
-    ``numba_cache_too`` False: all but ``NUMBA_CACHE_DIR`` (what reading the command line needs: ``--help`` compiles nothing).
+    """Check every variable an entry point depends on, as where each is read (InputError naming the first bad one);
+    ``numba_cache_too`` False: all but ``NUMBA_CACHE_DIR`` (``--help`` compiles nothing).
 
     >>> check()
     """
@@ -220,14 +211,12 @@ def check(numba_cache_too=True) -> None:
 
 
 def prepare(numba_cache_too=True) -> None:
-    """Ready this process for crfmap's kernels; the entry points call it first, a library user may (optional).
+    """Ready this process for crfmap's kernels; the entry points call it first, a library user may.
 
-    Checks every variable (:func:`check`) before numba reads ``NUMBA_NUM_THREADS``; where the package's own
-    ``__pycache__`` folders are read-only and ``NUMBA_CACHE_DIR`` is unset, points numba at a user cache folder
-    (:func:`crfmap._numba_cache.configure`); sets ``OMP_WAIT_POLICY=PASSIVE`` unless set (see above). Importing
-    crfmap does none of this. ``numba_cache_too`` False leaves the cache folder to :func:`prepare_cache`, called once
-    the work is known to need kernels (the ``crfmap`` command: after its command line is read, so that ``--help``
-    and a usage error work for a user who cannot write the venv's cache).
+    Checks every variable (:func:`check`) before numba reads ``NUMBA_NUM_THREADS`` once at its import (and then fails
+    with a traceback on ``0``, or ignores ``abc``), so the error is crfmap's one line naming the variable; sets
+    ``OMP_WAIT_POLICY``; and :func:`prepare_cache`, unless ``numba_cache_too`` is False (the ``crfmap`` command calls
+    it after reading its command line, so that ``--help`` works for a user who cannot write the venv's cache).
     """
     check(numba_cache_too=False)
     quiet_openmp_threads()

@@ -1,7 +1,5 @@
-"""Errors crfmap raises for bad input.
-
-Every error names the input (a file, an argument, an array) and what is wrong
-with it, so that the command line can print it as one line and exit with 2.
+"""Errors crfmap raises for bad input: each names the input (a file, an argument, an array) and what is wrong with it,
+so that the command line can print it as one line and exit with 2.
 """
 
 
@@ -23,10 +21,7 @@ class CrfmapError(Exception):
 
 
 class InputError(CrfmapError, ValueError):
-    """An input (file, array, argument) is missing or malformed.
-
-    The message starts with the input's name, e.g. ``"map.yaml: missing key 'resolution'"``.
-    """
+    """An input is missing or malformed; the message starts with its name: ``"map.yaml: missing key 'resolution'"``."""
 
     def __init__(self, source, problem):
         self.source = one_line(source)

@@ -1,17 +1,10 @@
 """Planar poses (x, y, yaw) and the tf tree that chains them (REP 103 / REP 105).
 
-A pose ``a`` of frame A in its parent P is the transform that takes coordinates in A
-to coordinates in P. :func:`compose` chains them (``compose(map_T_odom, odom_T_base)``
-is base_link in map), :func:`inverse` undoes one, :func:`interpolate_poses` samples a
-moving one in time. All are vectorised over leading axes: a row of 3 or an (n, 3) array.
-
-:class:`TfTree` holds the transforms a bag's ``/tf`` and ``/tf_static`` carry (each frame
-has one parent) and follows them from a frame up to the root of its tree at given
-times, as ``tf2`` ``lookupTransform`` does for a planar robot.
-
->>> odom_in_map, base_in_odom = [1.0, 0.0, np.pi / 2], [1.0, 0.0, 0.0]
->>> compose(odom_in_map, base_in_odom).round(6).tolist()
-[1.0, 1.0, 1.570796]
+A pose ``a`` of frame A in its parent P is the transform that takes coordinates in A to coordinates in P.
+:func:`compose` chains them (``compose(map_T_odom, odom_T_base)`` is base_link in map), :func:`inverse` undoes one,
+:func:`interpolate_poses` samples a moving one in time; all are vectorised over leading axes (a row of 3 or (n, 3)).
+:class:`TfTree` holds the transforms of a bag's ``/tf`` and ``/tf_static`` and follows them from a frame up to the
+root of its tree at given times, as ``tf2`` ``lookupTransform`` does for a planar robot.
 """
 from __future__ import annotations
 
@@ -24,7 +17,6 @@ from crfmap.errors import InputError
 TWO_PI = 2.0 * math.pi
 
 
-# --- planar pose algebra (x, y, yaw), vectorised over rows ----------------------------------
 def wrap_angle(a):
     """Angles wrapped to [-pi, pi), as float64.
 
@@ -59,10 +51,8 @@ def inverse(a):
 
 
 def interpolate_poses(stamps, poses, times):
-    """Poses at ``times`` by linear interpolation (yaw unwrapped); also a mask of times inside the track.
-
-    Times outside ``[stamps[0], stamps[-1]]`` get the end pose and ``False`` in the mask;
-    of several poses at one stamp the last wins.
+    """Poses at ``times`` by linear interpolation (yaw unwrapped), and a mask of times inside the track (outside,
+    the end pose). Of several poses at one stamp the last wins.
 
     >>> p, ok = interpolate_poses([0.0, 1.0], [[0, 0, 3.0], [2, 0, -3.0]], [0.5, 2.0])
     >>> p[0].round(3).tolist(), ok.tolist()
@@ -78,8 +68,7 @@ def interpolate_poses(stamps, poses, times):
     yaw = np.unwrap(poses[:, 2])
     out = np.stack([np.interp(times, stamps, poses[:, 0]), np.interp(times, stamps, poses[:, 1]),
                     wrap_angle(np.interp(times, stamps, yaw))], axis=-1)
-    # A pose sampled exactly at a knot keeps its value bit for bit (np.interp at a knot is exact,
-    # but the unwrap/wrap round trip of yaw is not).
+    # a pose sampled exactly at a knot keeps its value bit for bit (the unwrap/wrap round trip of yaw is not exact)
     idx = np.searchsorted(stamps, times)
     exact = (idx < len(stamps)) & (stamps[np.minimum(idx, len(stamps) - 1)] == times)
     out[exact, 2] = poses[idx[exact], 2]
@@ -102,10 +91,8 @@ QUATERNION_NORM_TOLERANCE = 0.01  # tf2 refuses |x²+y²+z²+w² - 1| above this
 def quaternion_to_yaw(q, source="quaternion"):
     """Yaw [rad] of a quaternion ``q`` with attributes x, y, z, w (e.g. a geometry_msgs/Quaternion).
 
-    The rule for quaternions that are not of unit length is tf2's: a squared norm more than
-    :data:`QUATERNION_NORM_TOLERANCE` away from 1 (a zero, NaN or badly scaled quaternion)
-    is an error (InputError naming ``source``); one within it is normalised before use
-    (the yaw formula below is only right for unit quaternions).
+    tf2's rule: a squared norm more than :data:`QUATERNION_NORM_TOLERANCE` from 1 is an InputError naming ``source``;
+    one within it is normalised before use (the yaw formula holds for unit quaternions only).
 
     >>> from types import SimpleNamespace as Q
     >>> round(quaternion_to_yaw(Q(x=0.0, y=0.0, z=0.7071, w=0.7071)), 4)
@@ -125,13 +112,11 @@ def quaternion_to_yaw(q, source="quaternion"):
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
-# --- the tf tree -----------------------------------------------------------------------------
 class TfTree:
     """Static and moving transforms between frames, each frame with one parent (a tf tree).
 
-    ``static[child] = (parent, pose)``; ``dynamic[child] = [parent, [(stamp [s], pose), ...]]``.
-    Frame names lose a leading '/' (ROS1 names like '/odom' are 'odom' in tf2).
-    ``conflicts`` counts moving transforms ignored because their frame already had another parent.
+    ``static[child] = (parent, pose)``; ``dynamic[child] = [parent, [(stamp [s], pose), ...]]``. Frame names lose a
+    leading '/' (ROS1's '/odom' is 'odom' in tf2). ``conflicts`` counts moving transforms of a second parent, ignored.
 
     >>> tree = TfTree()
     >>> tree.add("base_link", "laser", (0.1, 0.0, 0.0))
@@ -160,10 +145,8 @@ class TfTree:
         entry[1].append((stamp, pose))
 
     def static_chain(self, frame, stop=None):
-        """Follow the static transforms up from ``frame``: (top frame, pose of ``frame`` in it, frames passed).
-
-        Stops at ``stop``, at a frame without a static parent, or at a loop.
-        """
+        """Follow the static transforms up from ``frame`` until ``stop``, a frame without a static parent, or a loop:
+        (top frame, pose of ``frame`` in it, frames passed)."""
         pose = np.zeros(3)
         passed = [frame]
         while frame in self.static and frame != stop:
@@ -176,12 +159,8 @@ class TfTree:
         return frame, pose, passed
 
     def poses_in_root(self, start_frame, start_pose, times, source="tf"):
-        """Poses of ``start_frame`` (times ``start_pose``) in the root of the tree at ``times`` [s].
-
-        Moving transforms are interpolated (:func:`interpolate_poses`). Returns
-        (poses (n, 3), mask of times inside every moving transform's time span, root frame,
-        number of moving transforms passed). A loop raises InputError naming ``source``.
-        """
+        """(poses (n, 3) of ``start_frame`` (times ``start_pose``) in the root of the tree at ``times`` [s], mask of
+        times inside every moving transform's span, root frame, moving transforms passed); a loop: InputError."""
         poses = np.broadcast_to(start_pose, (len(times), 3)).copy()
         inside = np.ones(len(times), bool)
         frame, seen, moving = start_frame, {start_frame}, 0

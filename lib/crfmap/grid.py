@@ -120,9 +120,8 @@ class OccupancyGrid:
         return ox + c * u - s * v, oy + s * u + c * v
 
     def bounds(self):
-        """(xmin, ymin, xmax, ymax) [m]: the world rectangle the cells cover (their bounding box if rotated).
-
-        The form :func:`crfmap.mapping.build_grid` takes (``bounds=``) to build a grid over the same cells.
+        """(xmin, ymin, xmax, ymax) [m]: the world rectangle the cells cover (their bounding box if rotated), as
+        :func:`crfmap.mapping.build_grid` takes it (``bounds=``).
 
         >>> OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)).bounds()
         (1.0, 2.0, 2.5, 3.0)

@@ -1,8 +1,6 @@
-"""Ray casting on a grid: Bresenham's line with an error term (thesis Listing 1).
-
-Cells are integer (x, y) indices of a ``[y, x]`` array. The private ``@njit`` kernels
-take plain integers and a preallocated buffer so other kernels (the simulator, the grid
-builder) can call them in their own loops; the public functions check their input.
+"""Ray casting on a grid: Bresenham's line with an error term (thesis Listing 1). Cells are integer (x, y) indices of a
+``[y, x]`` array. The ``@njit`` kernels take plain integers and a preallocated buffer, so other kernels (the simulator,
+the grid builder) call them in their own loops; :func:`line_cells` and :func:`first_hit` check their input.
 """
 from __future__ import annotations
 
@@ -33,10 +31,8 @@ def _step(x, y, err, dx, dy, sx, sy):
 
 @njit(cache=True, nogil=True)
 def bresenham_step(x0, y0, x1, y1, out):
-    """Write the cells of the line (x0, y0) -> (x1, y1) into ``out[:, 0:2]`` as (x, y); return the count.
-
-    ``out`` needs at least ``_line_length(...)`` rows. At a tie (the diagonal-gap ambiguity
-    of thesis Fig. 15) the minor coordinate stays nearer the start, as Listing 1's error term does.
+    """Write the cells of the line (x0, y0) -> (x1, y1) into ``out[:, 0:2]`` (at least ``_line_length(...)`` rows) as
+    (x, y); return the count. At a tie (thesis Fig. 15) the minor coordinate stays nearer the start, as in Listing 1.
     """
     dx = abs(x1 - x0)
     dy = abs(y1 - y0)
@@ -57,11 +53,8 @@ def bresenham_step(x0, y0, x1, y1, out):
 
 @njit(cache=True, nogil=True)
 def first_hit_kernel(occupied, x0, y0, x1, y1):
-    """First cell on the line (x0, y0) -> (x1, y1) with ``occupied[y, x]`` true, leaving the grid ends the ray.
-
-    Returns (x, y, hit): the occupied cell and True, or the last in-grid cell and False.
-    The start cell itself is not tested (the robot stands there).
-    """
+    """(x, y, True) of the first cell after (x0, y0) towards (x1, y1) with ``occupied[y, x]`` (the start cell, where
+    the robot stands, is not tested), or (x, y, False) of the last in-grid cell (leaving the grid ends the ray)."""
     h, w = occupied.shape
     dx = abs(x1 - x0)
     dy = abs(y1 - y0)
@@ -98,9 +91,8 @@ def line_cells(x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
 
 
 def first_hit(occupied, start, end):
-    """First occupied cell of ``occupied`` ([y, x] bool) seen from cell ``start`` (x, y) towards cell ``end``.
-
-    (x, y) of the hit cell, or None if the ray reaches ``end`` (or leaves the grid) unblocked.
+    """(x, y) of the first occupied cell of ``occupied`` ([y, x] bool) seen from cell ``start`` (x, y) towards cell
+    ``end``, or None if the ray reaches ``end`` (or leaves the grid) unblocked.
 
     >>> occ = np.zeros((1, 5), bool); occ[0, 3] = True
     >>> first_hit(occ, (0, 0), (4, 0))

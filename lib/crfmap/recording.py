@@ -1,7 +1,6 @@
-"""What a robot recorded: laser scans, poses, odometry and commands, independent of file format.
-
-Readers (ROS1/ROS2 bags, CARMEN logs) and the simulator produce these; the grid builder and the bag writer consume
-them. Units are SI (metres, radians, seconds); poses are (x, y, yaw) with yaw counter-clockwise from +x (REP 103).
+"""What a robot recorded (laser scans, poses, odometry, commands) independent of file format: readers and the
+simulator produce it, the grid builder and the bag writer consume it. Units are SI (metres, radians, seconds); poses
+are (x, y, yaw) with yaw counter-clockwise from +x (REP 103).
 """
 from __future__ import annotations
 
@@ -28,10 +27,8 @@ class Trajectory:
 
 @dataclass
 class ScanSet:
-    """Laser scans with the laser's pose in a fixed frame at each scan: what the grid builder needs.
-
-    ``ranges[i, k]`` is beam k of scan i at angle ``angle_min + k * angle_increment`` in
-    the laser frame. REP 117: +inf = no return, -inf = too close, NaN = invalid.
+    """Laser scans with the laser's pose in a fixed frame at each scan. ``ranges[i, k]`` is beam k of scan i at angle
+    ``angle_min + k * angle_increment`` in the laser frame; REP 117: +inf = no return, -inf = too close, NaN = invalid.
     """
 
     ranges: np.ndarray  # (n_scans, n_beams) float32 [m]
@@ -77,11 +74,8 @@ class ScanSet:
 
 @dataclass
 class Recording:
-    """Everything a (real or simulated) run records, as a bag would hold it.
-
-    ``scans.laser_poses`` are the laser poses in ``map`` (true or corrected ones); ``odometry`` is base_link in odom
-    as the wheels report it; ``true_poses`` is base_link in map when known (simulation, corrected logs).
-    """
+    """Everything a (real or simulated) run records, as a bag would hold it: ``scans.laser_poses`` in ``map`` (true or
+    corrected), ``odometry`` base_link in odom as the wheels report it, ``true_poses`` base_link in map when known."""
 
     scans: ScanSet
     laser_mount: tuple = (0.0, 0.0, 0.0)  # base_link -> laser (x, y, yaw), from /tf_static
