@@ -1,5 +1,5 @@
 """Checked inputs: numbers, masks, paths and sizes a user gives, so the errors read the same everywhere
-(``InputError(name, what is wrong)``). Domain checks (a scene variant, a potential table's layout) stay with their domain.
+(``InputError(name, what is wrong)``). Domain checks (a potential table's layout) stay with their domain.
 """
 from __future__ import annotations
 

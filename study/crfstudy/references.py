@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from crfmap.assess.mincut import floored_unary
-from crfmap.crf.model.potentials import check_pairing, check_table, DEFAULT_HIDDEN, DEFAULT_LINK, is_symmetric, link_unary
+from crfmap.crf.model.potentials import check_pairing, check_table, DEFAULT_HIDDEN, DEFAULT_LINK, link_unary
 from crfmap.errors import InputError
 from crfmap.grid import check_probability_array
 
@@ -51,7 +51,7 @@ def exact_marginals(observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, *, pairi
     p = check_probability_array(observed, "observed")
     hidden = check_table(hidden, "hidden")
     check_pairing(pairing)
-    if pairing == "receiver" and not is_symmetric(hidden):
+    if pairing == "receiver" and hidden[0, 1] != hidden[1, 0]:  # not symmetric
         raise InputError("hidden", "a non-symmetric table under the thesis's receiver pairing "
                          "defines no joint distribution; use pairing='oriented'")
     n = p.size

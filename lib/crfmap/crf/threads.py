@@ -61,10 +61,8 @@ def _run_group(kernel, calls):
 
 def run_all(kernel, calls, threads=None) -> list:
     """``kernel(*args)`` for every ``args`` of ``calls`` on ``threads`` threads, the caller's included; results in order.
-
-    Thread t runs calls t, t + threads, ... (so the first and last, e.g. the bands at the grid's edges, go to
-    different threads). A thread stops at its first failing call, raised here after every thread finished.
-    """
+    Thread t runs calls t, t + threads, ... (so the bands at the grid's edges go to different threads); a thread
+    stops at its first failing call, raised here after every thread finished."""
     calls = list(calls)
     n = min(thread_count(threads), len(calls))
     if n <= 1:

@@ -56,10 +56,8 @@ def _masked_compiled(act):
 
 @njit(inline="always", cache=True, fastmath=FASTMATH, error_model="numpy")
 def _four_unclamped(U, r0, r1, r2, r3, a0, a1, a2, a3, b0, b1, b2, b3):
-    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S).
-
-    Used as is for tables whose messages cannot leave [lo, hi] (all entries positive).
-    """
+    """Odds of the messages a cell sends east, west, north, south (tables a: E/N, b: W/S), unclamped: as is for
+    tables whose messages cannot leave [lo, hi] (all entries positive)."""
     p = U * r2 * r3
     q = U * r0 * r1
     R = p * r0
@@ -90,13 +88,10 @@ def _dp(new, old, one):
 
 
 def _send(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty):
-    """Cells k0 <= k < k0 + n of colour c in row y send (all have east and west neighbours).
-
-    With ``measure`` the largest change per column is max-accumulated into ``cb[ty]``; ``w_n``, ``w_s`` (1 or 0)
-    drop the north/south message of the top/bottom row, which goes nowhere. Unsigned indices and no slices keep the
-    loops vectorised and cheap to enter. Compiled, ``act``'s type picks the rows (:func:`_send_compiled`); this is the
-    same choice in plain Python (``NUMBA_DISABLE_JIT``).
-    """
+    """Cells k0 <= k < k0 + n of colour c in row y send (all have east and west neighbours). With ``measure`` the
+    largest change per column is max-accumulated into ``cb[ty]``; ``w_n``, ``w_s`` (1 or 0) drop the north/south
+    message of the top/bottom row, which goes nowhere. Unsigned indices and no slices keep the loops vectorised.
+    Compiled, ``act``'s type picks the rows (:func:`_send_compiled`); this is that choice in plain Python."""
     send = _send_masked if _masked(act) else _send_whole
     send(msg, un, act, c, y, k0, n, co, lo, hi, measure, w_n, w_s, cb, ty)
 

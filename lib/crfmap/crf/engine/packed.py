@@ -75,12 +75,9 @@ def full_extents(h, w):
 
 
 class PackedBlock:
-    """Odds messages and observations of a block of ``h x w`` cells in red/black planes.
-
-    ``tables``: (4, 2, 2) directional tables; ``floor``: the message floor in probability. ``arrays`` (msg, un):
-    planes to reuse (e.g. from :mod:`crfmap.crf.engine.workspace`; None: new ones). ``fill`` True makes them uniform;
-    False leaves them undefined for :meth:`start_uniform`, which writes what is read.
-    """
+    """Odds messages and observations of a block of ``h x w`` cells in red/black planes. ``tables``: (4, 2, 2)
+    directional tables; ``floor``: the message floor in probability; ``arrays`` (msg, un): planes to reuse (None: new
+    ones); ``fill`` False leaves them undefined for :meth:`start_uniform` (True: uniform)."""
 
     def __init__(self, h, w, dtype, tables, floor, arrays=None, fill=True):
         self.h, self.w = int(h), int(w)

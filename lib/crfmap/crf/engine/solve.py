@@ -47,13 +47,11 @@ def fused_start_applies(grid, tables, max_iter, block, region, messages) -> bool
 
 def solve(prob, tables, link, *, max_iter, tol, dtype, threads, region=None, messages=None, states=None,
           fused=False, block=PASS_ITERATIONS, freeze=None, floor=MESSAGE_FLOOR) -> EngineResult:
-    """Checkerboard LBP on the fast kernels, as :func:`crfmap.crf.inference.lbp.infer` calls it.
-
-    ``prob``: float64 [y, x] observations; ``tables``: the four directional tables; ``region``: the senders or None;
-    ``messages``: a warm start or None; ``states``: the certain cells or None; ``block``, ``freeze``: as in
+    """Checkerboard LBP on the fast kernels, as :func:`crfmap.crf.inference.lbp.infer` calls it. ``prob``: float64
+    [y, x] observations; ``tables``: the four directional tables; ``region``: the senders or None; ``messages``: a
+    warm start or None; ``states``: the certain cells or None; ``block``, ``freeze``: as in
     :meth:`~crfmap.crf.engine.packed.PackedBlock.run`. With ``fused`` (``states`` not computed yet) a bad ``prob``
-    raises :class:`crfmap.errors.InputError`, and the returned ``states`` are the certain cells found.
-    """
+    raises :class:`crfmap.errors.InputError`, and the returned ``states`` are the certain cells found."""
     shape = prob.shape
     t = [time.perf_counter()]
     if region is not None and messages is None and states is None:  # the presets' call: the lean bounded path

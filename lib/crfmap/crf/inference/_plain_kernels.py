@@ -79,10 +79,8 @@ def _send_rows(unary, msg, dst, coef, active, use_active, parity, y0, floor, dam
 
 @njit(nogil=True, cache=True)
 def _sweep_along_rows(unary, msg, coef, active, use_active, d, y0, floor, damping, r0, r1):
-    """The east-bound (d = 0) or west-bound (d = 1) sweep of rows [y0 + r0, y0 + r1), each row in order along d.
-
-    A row's messages of direction d depend only on that row's, so rows are independent.
-    """
+    """The east-bound (d = 0) or west-bound (d = 1) sweep of rows [y0 + r0, y0 + r1), each row in order along d
+    (rows are independent: a row's messages of direction d depend only on that row's)."""
     w = unary.shape[1]
     change = 0.0
     for y in range(y0 + r0, y0 + r1):

@@ -39,7 +39,7 @@ class Announcer(event.Listener):
 
 @contextlib.contextmanager
 def announcing(stream=None):
-    """Print :data:`MESSAGE` (``stream``, default stderr) once if numba compiles a kernel inside the block (``.said``)."""
+    """Print :data:`MESSAGE` (``stream``, default stderr) once if numba compiles a kernel in the block (``.said``)."""
     announcer = Announcer(stream)
     with event.install_listener("numba:compile", announcer):
         yield announcer

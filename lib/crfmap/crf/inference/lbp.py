@@ -46,9 +46,8 @@ from crfmap.grid import OccupancyGrid, as_grid, check_probability_array
 
 
 def message(table, sender_p) -> float:
-    """P(receiver occupied) of one message through a 2x2 table from a sender at P(occupied) = sender_p.
-
-    Thesis eq. 1 / Table 1:
+    """P(receiver occupied) of one message through a 2x2 table from a sender at P(occupied) = sender_p (thesis eq. 1,
+    Table 1).
 
     >>> round(message([[0.9, 0.1], [0.1, 0.9]], 0.8), 6)
     0.74

@@ -201,10 +201,8 @@ PLAIN_RUNNERS = {
 
 
 def run_schedule(settings, probability, tables, link, max_iter, tol, senders, messages, dtype, floor, clamped):
-    """A plain schedule from start to end; returns (beliefs, messages, changes).
-
-    ``senders``: the cells that send or None (all); ``clamped``: (certain states or None, the region or None).
-    """
+    """A plain schedule from start to end: (beliefs, messages, changes). ``senders``: the cells that send or None
+    (all); ``clamped``: (certain states or None, the region or None)."""
     shape = probability.shape
     unary = np.clip(link_unary(probability, link), floor, 1.0 - floor).astype(dtype)
     coef = message_coefficients(tables).astype(dtype)

@@ -64,11 +64,8 @@ def _doubled(stack, top):
 
 @njit(cache=True)
 def _propagate(state, forced, senders, use_senders, steps):
-    """Unit propagation of certainty through hidden tables with zeros (depth first, in place).
-
-    ``forced[d, s]`` is the state a receiver of a direction-d message from a sender certain in
-    ``s`` must take (UNCERTAIN: none; -2: the sender's state is impossible next to any neighbour).
-    Returns (flat index of a contradicting cell, of the certain neighbour that forces it), or (-1, -1).
+    """Unit propagation of certainty through hidden tables with zeros (depth first, in place), with ``forced`` of
+    :func:`forced_states`: (flat index of a contradicting cell, of the certain neighbour that forces it), or (-1, -1).
     """
     h, w = state.shape
     stack = np.empty(1024, np.int64)

@@ -129,11 +129,9 @@ class EvidenceGate:
             _check_evidence_count(self.lethal_evidence, "lethal_evidence")
 
     def apply(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
-        """The map for nav2, a new float64 [y, x] array: the second of :meth:`beliefs_and_map`.
-
-        Give the cell counts (``hits``, ``passes``), or the signed ``evidence`` x (a map file's P read back by
-        :func:`crfmap.crf.presets.evidence_from_probability`) with an ``observed`` mask (default x != 0).
-        """
+        """The map for nav2, a new float64 [y, x] array: the second of :meth:`beliefs_and_map`. Give the cell counts
+        (``hits``, ``passes``), or the signed ``evidence`` x (a map file's P read back by
+        :func:`crfmap.crf.presets.evidence_from_probability`) with an ``observed`` mask (default x != 0)."""
         return self.beliefs_and_map(probability, hits, passes, evidence, observed)[1]
 
     def beliefs_and_map(self, probability, hits=None, passes=None, evidence=None, observed=None, transform=None):

@@ -97,17 +97,9 @@ def check_pairing(pairing) -> str:
     return pairing
 
 
-def is_symmetric(table) -> bool:
-    t = np.asarray(table, dtype=np.float64)
-    return bool(t[0, 1] == t[1, 0])
-
-
 def directional_tables(hidden, pairing="receiver") -> np.ndarray:
-    """The table each message direction uses, rows = receiver, columns = sender: shape (4, 2, 2).
-
-    Indexed by TO_EAST, TO_WEST, TO_NORTH, TO_SOUTH. Under ``"oriented"`` the edge potential
-    ``hidden[x_west, x_east]`` reads as ``hidden.T`` for messages travelling east or north.
-    """
+    """The table each message direction (TO_EAST, ...) uses, rows = receiver: shape (4, 2, 2). Under ``"oriented"``
+    the edge potential ``hidden[x_west, x_east]`` reads as ``hidden.T`` for messages travelling east or north."""
     t = check_table(hidden, "hidden")
     check_pairing(pairing)
     if pairing == "receiver":
@@ -116,11 +108,8 @@ def directional_tables(hidden, pairing="receiver") -> np.ndarray:
 
 
 def message_coefficients(tables) -> np.ndarray:
-    """Per direction, the four numbers of the one-division message update (shape (4, 4)).
-
-    With cavity weights A (occupied) and B (empty) at the sender, the normalised message
-    P(receiver occupied) is ``(oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)``.
-    """
+    """Per direction, (oo, oe, oo + eo, oe + ee): with cavity weights A (occupied) and B (empty) at the sender, a
+    message is one division, P(receiver occupied) = ``(oo*A + oe*B) / ((oo + eo)*A + (oe + ee)*B)``."""
     tables = np.asarray(tables, dtype=np.float64)
     oo, oe, eo, ee = tables[:, 0, 0], tables[:, 0, 1], tables[:, 1, 0], tables[:, 1, 1]
     return np.stack([oo, oe, oo + eo, oe + ee], axis=1)
