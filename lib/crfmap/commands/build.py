@@ -9,8 +9,6 @@ from pathlib import Path
 from crfmap.errors import InputError
 from crfmap.io.recordings import load_recording
 
-GRID_SUFFIXES = (".yaml", ".yml", ".npy")
-
 
 def add_bag_options(p):
     """Options saying how to read a bag (shared with ``crfmap convert``)."""
@@ -49,9 +47,8 @@ def ros2_bag_kwargs(args, fmt):
 def add_map_output_options(p):
     """How a map_server YAML output is written, and which nav2 loader judges it (shared with ``infer``)."""
     p.add_argument("--mode", default=None, choices=["trinary", "scale", "raw"],
-                   help="map_server mode of a YAML output. trinary (default): what nav2's map_saver writes, "
-                   "P >= 0.65 occupied, P <= 0.2 free, else unknown; nav2 and ROS 1 navigate on it. scale: "
-                   "keeps P to a percent with thresholds 1/0, NOT for navigation (nav2 sees almost no "
+                   help="map_server mode of a YAML output. trinary (default): nav2's map_saver's, P >= 0.65 occupied, "
+                   "P <= 0.2 free, else unknown. scale: P to a percent, NOT for navigation (nav2 sees almost no "
                    "obstacles). Exact probabilities: write a .npy")
     p.add_argument("--save-occupied-thresh", type=float, default=None, metavar="P",
                    help="occupied_thresh of a YAML output (default: map_saver's 0.65; scale: 1)")
@@ -63,19 +60,14 @@ def add_map_output_options(p):
 
 
 def save_map_output(grid, out, args) -> str:
-    """Save ``grid`` to ``out`` with the map output options; returns what nav2 will see, as text.
-
-    A YAML output is loaded back with nav2's rules (``args.loader``) and judged by the
-    costmap static layer's defaults, so the counts are those of the written file.
-    """
+    """Save ``grid`` to ``out`` with the map output options; returns what nav2 will see, counted on the written file
+    loaded back with nav2's rules (``args.loader``) and the costmap's defaults."""
     from crfmap.io.grid_files import save_grid
 
     if str(out).lower().endswith((".yaml", ".yml")):
         args.mode = args.mode or "trinary"
-        from crfmap.io.map_server import load_map
+        from crfmap.io.map_server import FREE_THRESH_DEFAULT, OCCUPIED_THRESH_DEFAULT, load_map
         from crfmap.io.nav2_costmap import describe_for_nav2
-
-        from crfmap.io.map_server import FREE_THRESH_DEFAULT, OCCUPIED_THRESH_DEFAULT
 
         occ, free = args.save_occupied_thresh, args.save_free_thresh
         if args.mode == "trinary":  # map_saver's thresholds, not those of a loaded input map

@@ -19,13 +19,10 @@ def add_parser(sub):
     p = sub.add_parser(
         "convert",
         help="convert a CARMEN log (or a bag) to a ROS2 or ROS1 bag",
-        description="Write /scan, /odom, /tf, /tf_static and /ground_truth_pose (corrected poses) "
-        "of a CARMEN log as a ROS bag. A bag as input is re-written in the other format. No message gets "
-        "time 0 (ROS reads it as 'no time'): a CARMEN log's ODOM records stamped 0 or out of time order "
-        "are dropped (with a warning saying how many); a bag whose stamps start at 0 (an older crfmap "
-        "simulation) has every stamp shifted by 1700000000 s, the simulator's start time. Scans whose stamps "
-        "cannot place them (all 0, or repeated at different poses) are stamped by their order, 0.1 s apart "
-        "(odometry then dropped), with a warning.",
+        description="Write /scan, /odom, /tf, /tf_static and /ground_truth_pose (corrected poses) of a CARMEN "
+        "log, or a bag, as a ROS bag. No message gets time 0 (ROS reads it as 'no time'): ODOM records stamped 0 "
+        "or out of order are dropped, stamps starting at 0 shifted by 1700000000 s, and scans whose stamps cannot "
+        "place them stamped by their order, 0.1 s apart (odometry dropped), each with a warning.",
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("output", help="ROS2 bag folder, or ROS1 file ending in .bag")
@@ -46,12 +43,9 @@ ORDER_PERIOD = 0.1  # [s] between scans stamped by their order (10 Hz, a common 
 
 
 def stamps_from_order(rec, source):
-    """``rec`` with its scans stamped by their order if their stamps cannot place them (one warning), else ``rec``.
-
-    A log whose FLASER stamps are all 0, or repeat at different poses, cannot be a bag: tf holds one pose per time
-    (:func:`crfmap.io.bag_writer.clashing_scans`). Scan i is then stamped ``START_TIME + i * ORDER_PERIOD``, the
-    true poses with it; odometry and cmd_vel, whose own stamps cannot be related to those, are dropped.
-    """
+    """``rec``, or, if its scan stamps cannot place them in a tf tree (all 0, or repeated at different poses), ``rec``
+    with scan i stamped ``START_TIME + i * ORDER_PERIOD`` (true poses with it; odometry and cmd_vel dropped; one
+    warning)."""
     from crfmap.io.bag_writer import clashing_scans
     from crfmap.sim.simulator import START_TIME
 
@@ -76,13 +70,8 @@ def stamps_from_order(rec, source):
 
 
 def shift_zero_start(rec, source):
-    """``rec``, its stamps shifted by the simulator's start time if any rounds to 0 ns, with a warning.
-
-    A bag whose clock starts at 0 is a simulation (crfmap's before it started at
-    :data:`~crfmap.sim.simulator.START_TIME`); shifted, it is what a rerun of that simulation writes
-    now. A CARMEN log's zero stamps are corrupt records, which :func:`~crfmap.io.carmen.read_carmen`
-    drops; a log whose FLASER lines themselves are stamped 0 is shifted like a bag.
-    """
+    """``rec``, its stamps shifted by the simulator's start time if any rounds to 0 ns, with a warning: a clock that
+    starts at 0 is an older simulation's, and shifted it is what a rerun writes now."""
     from crfmap.sim.simulator import START_TIME
 
     if np.min(recording_stamps(rec)) >= 0.5e-9:

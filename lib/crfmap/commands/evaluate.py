@@ -17,18 +17,11 @@ def add_parser(sub):
         "evaluate",
         help="score the raw grid, baselines, a preset and published peers against scans the map never saw",
         description="Scan-split validation (crfmap.assess.scansplit): build the grid from the even scans of a "
-        "CARMEN log or ROS bag, refine it, and score P(occupied) against what the odd scans observe (a "
-        "returned beam's end cell occupied, cells it passes free): Brier score, log-loss, AUC and recall of "
-        "observed walls, for all cells the odd scans observed and for those the even scans saw / never saw, "
-        "with spatial-block bootstrap intervals, and the expected calibration error. Rows: the baselines, the "
-        "preset and the published peers: octomap (this project's implementation of OctoMap's clamped log-odds "
-        "update, checked against the OctoMap library; constants searched on Intel by the preset's rule), "
-        "octomap-defaults (the same at the OctoMap library's defaults) and hilbert (this project's Bayesian Hilbert "
-        "map, constants searched on Intel). Then the navigation tables (crfmap.assess.navigation): every map read the way nav2 reads "
-        "the trinary map crfmap infer writes (lethal P >= 0.65, free P <= 0.196 after rounding to a percent), "
-        "lethal recall and precision, dangerous misses (held-out occupied cells called free; those farther than "
-        "0.5 m from every lethal cell), ghost obstacles (cells passed twice and never hit, called lethal), with "
-        "paired intervals of the difference to the raw grid, and wall thickness and continuity.",
+        "CARMEN log or ROS bag, refine it, and score P(occupied) against what the odd scans observe: Brier score, "
+        "log-loss, AUC and wall recall with spatial-block bootstrap intervals, and the calibration error, for the "
+        "baselines, the preset and the published peers (crfmap.assess.peers). Then the navigation tables "
+        "(crfmap.assess.navigation): every map as nav2 reads the trinary file crfmap infer writes, with paired "
+        "intervals of the difference to the raw grid, and localisation on each map (crfmap.assess.localisation).",
     )
     p.add_argument("input", help="CARMEN log (.log / .log.gz), ROS1 .bag or ROS2 bag folder")
     p.add_argument("--resolution", type=float, default=0.05, help="cell size in metres (default 0.05)")

@@ -40,8 +40,7 @@ def add_parser(sub):
                    help="iteration limit (default: the preset's; the thesis used 2)")
     p.add_argument("--tol", type=float, default=None,
                    help="stop when the largest message change is below this (default: the preset's); --tol 0 "
-                   "runs all --max-iter iterations, as asked: --progress shows them, Ctrl-C stops the run and "
-                   "writes nothing")
+                   "runs all --max-iter iterations (Ctrl-C stops the run and writes nothing)")
     p.add_argument("--progress", action="store_true", default=None,
                    help="show LBP's iterations and its largest message change (default: when stderr is a terminal)")
     p.add_argument("--damping", type=float, default=0.0, help="weight of the old message, in [0, 1)")
@@ -55,9 +54,7 @@ def add_parser(sub):
                                             for p in PRESETS.values()) + "; custom tables the whole grid)")
     p.add_argument("--free-thresh", type=float, default=None,
                    help="override a YAML input's free_thresh when loading. Default: the file's, except where it "
-                   "would read unknown cells as free (Humble's map_saver writes 0.25, under which its unknown grey "
-                   "205 loads as free): then 0.196 keeps them unknown, said in one warning; give the file's value "
-                   "(e.g. --free-thresh 0.25) for nav2 Humble's reading")
+                   "would read unknown cells as free (Humble's 0.25): then 0.196, with a warning")
     p.add_argument("--occupied-thresh", type=float, default=None, help="override a YAML input's occupied_thresh")
     add_map_output_options(p)  # --mode, --save-occupied-thresh, --save-free-thresh, --loader
     p.add_argument("--force", action="store_true", help="allow OUT to replace IN (an in-place update)")
@@ -111,12 +108,9 @@ def _preset(args):
 
 
 def load_input(args):
-    """The input grid; a map YAML whose free_thresh reads unknown cells as free keeps them unknown (one warning).
-
-    Humble's map_saver writes ``free_thresh: 0.25``, under which its own unknown grey (205, occ 0.196)
-    loads as free: refining and writing that map (for Jazzy's 0.196) would make every unexplored cell
-    free for good. Unless ``--free-thresh`` is given, such a map is read with map_saver's 0.196 instead.
-    """
+    """The input grid. A map YAML whose free_thresh reads unknown cells as free (Humble's 0.25 reads its own grey 205
+    so) is read with 0.196 unless ``--free-thresh`` is given, with one warning: refined and written, every unexplored
+    cell would be free for good."""
     from crfmap.io.grid_files import load_grid
 
     def load(free_thresh):

@@ -1,14 +1,5 @@
-"""``crfmap node refine|map``: crfmap live between SLAM and navigation, over ROS 2 (DDS) or ROS 1.
-
-Examples::
-
-    crfmap node refine                          # /map -> /map_refined, ROS 2 over Cyclone DDS
-    crfmap node map --bounds -20 -20 20 20      # /scan + /tf -> /map and /map_metadata (default preset)
-    crfmap node map --preset thesis             # the thesis's table [[10, 1], [1, 10]] (erases thin walls)
-    crfmap node refine --backend rospy          # through a running roscore
-
-SIGINT (Ctrl-C) and SIGTERM end the node cleanly; it then prints what it did on stderr.
-"""
+"""``crfmap node refine|map``: crfmap live between SLAM and navigation, over ROS 2 (DDS) or ROS 1; SIGINT and
+SIGTERM end it cleanly, and it prints what it did on stderr."""
 from __future__ import annotations
 
 import argparse
@@ -27,10 +18,8 @@ def add_parser(sub):
     p = sub.add_parser(
         "node", help="run crfmap as a live ROS node: refine maps, or map from scans and tf",
         description="A live ROS node. 'refine': subscribe to a nav_msgs/OccupancyGrid (e.g. slam_toolbox's /map), "
-        "refine each new map with the default preset as 'crfmap infer' does, publish it with the same header and "
-        "info. 'map': subscribe to sensor_msgs/LaserScan and tf, map online with a preset (default: the default "
-        "preset, as 'crfmap infer'), publish /map and /map_metadata, and on stop the converged final map. Map "
-        "topics are reliable + transient local (depth 1), scans best effort (sensor data).")
+        "refine each new map as 'crfmap infer' does, publish it with the same header and info. 'map': map online "
+        "from sensor_msgs/LaserScan and tf, publish /map and /map_metadata, and on stop the converged final map.")
     modes = p.add_subparsers(dest="mode", metavar="MODE", required=True)
     refine = modes.add_parser("refine", help="refine each new OccupancyGrid and publish it")
     refine.add_argument("--input", default="/map", metavar="TOPIC", help="nav_msgs/OccupancyGrid to refine (default /map)")
@@ -69,8 +58,7 @@ def add_parser(sub):
                           help="publish at most once per S seconds (default 1)")
         mode.add_argument("--values", choices=VALUE_MODES, default="trinary",
                           help="what the published OccupancyGrid holds: trinary (default: 100 lethal, 0 free, -1 "
-                          "unknown, as map_server publishes the map crfmap infer writes; nav2's costmap reads every "
-                          "value below 100 as free) or percent (P x 100, for tools that read probabilities)")
+                          "unknown, as map_server publishes crfmap infer's map) or percent (P x 100)")
     return p
 
 

@@ -22,10 +22,7 @@ def written_files(output) -> list[Path]:
 
 
 def named_files(item) -> list[Path]:
-    """The files an input names besides itself: a map YAML's ``image:`` (as the loader resolves it).
-
-    A YAML that cannot be read names nothing here (loading it fails with its own error line).
-    """
+    """The files an input names besides itself: a map YAML's ``image:`` (none if unreadable: loading says why)."""
     item = Path(item)
     if item.suffix.lower() not in (".yaml", ".yml") or item.name.lower().endswith(".npy.yaml"):
         return []
@@ -44,11 +41,8 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def check_output(inputs, output, force=False, option="--force"):
-    """InputError naming ``output`` if writing it would replace one of ``inputs`` or a file they name (a map
-    YAML's image, whatever its name: ``image: out.pgm`` in ``in.yaml`` is an input of ``infer in.yaml out.yaml``).
-
-    ``force`` allows it (a deliberate in-place update); the write stays atomic either way.
-    """
+    """InputError naming ``output`` if writing it would replace one of ``inputs`` or a file they name (a map YAML's
+    image, whatever its name), unless ``force`` (an in-place update, atomic still)."""
     out_files = written_files(output)
     in_files = []
     for item in inputs:

@@ -1,13 +1,4 @@
-"""``crfmap simulate SCENE OUT_BAG``: drive a simulated robot through a scene and record a ROS bag.
-
-The bag holds the laser scans, odometry, true poses, Twist commands and the ground-truth map (see
-:mod:`crfmap.io.bag_reader`). OUT_BAG must not exist yet unless ``--overwrite`` is given; the bag is written to a
-temporary name and renamed when complete, so an interrupted run leaves nothing behind.
-
-Example::
-
-    crfmap simulate enclosed-train runs/enclosed --seed 1 --range-noise 0.02 --odom-noise 0.005
-"""
+"""``crfmap simulate SCENE OUT_BAG``: drive a simulated robot through a scene and record a ROS bag."""
 from __future__ import annotations
 
 import argparse
@@ -55,9 +46,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--resolution", type=float, default=None, metavar="M",
                    help="cell size of the scene [m] (default 0.1; office 0.05)")
     p.add_argument("--start-time", type=float, default=None, metavar="S",
-                   help="stamp of the first pose [s since the epoch] (default 1700000000 = 2023-11-14 "
-                   "22:13:20 UTC: wall-clock-like, fixed so that reruns are identical; must be > 0, as ROS "
-                   "reads a stamp of 0 as 'no time')")
+                   help="stamp of the first pose [s since the epoch] (default 1700000000: wall-clock-like, fixed so "
+                   "that reruns are identical; > 0, as ROS reads 0 as 'no time')")
     p.add_argument("--legacy-no-return", action="store_true",
                    help="report beams that hit nothing as -1 (the thesis) instead of +inf (REP 117)")
 

@@ -1,10 +1,4 @@
-"""ROS messages <-> crfmap values, for the bags :mod:`crfmap.io.bag_reader` reads and writes.
-
-Message types by name (``T_*``), the typestores crfmap writes with, a factory building
-each message of a :class:`~crfmap.recording.Recording` (ROS1 headers carry a ``seq``,
-ROS2 ones do not), and the conversions back: poses, stamps and grids out of messages.
-Private to the package: :mod:`crfmap.io.bag_reader` and :mod:`crfmap.io.bag_writer` are the interface.
-"""
+"""ROS messages <-> crfmap values, for :mod:`crfmap.io.bag_reader` and :mod:`crfmap.io.bag_writer` (the interface)."""
 from __future__ import annotations
 
 import math
@@ -32,9 +26,8 @@ TRUTH_TOPIC, MAP_TOPIC = "/ground_truth_pose", "/map"
 
 # --- values out of messages ---------------------------------------------------------------
 def pose_of(msg_pose, source="pose"):
-    """(x, y, yaw) of a geometry_msgs Pose or Transform; InputError naming ``source`` for a position that is not
-    finite or lies beyond :data:`crfmap.grid.MAX_EXTENT_M` (no map reaches there: a grid around it would be refused
-    later, naming no message), or a quaternion that is not a rotation (see :func:`crfmap.frames.quaternion_to_yaw`)."""
+    """(x, y, yaw) of a geometry_msgs Pose or Transform; InputError naming ``source`` for a position not finite or
+    beyond :data:`crfmap.grid.MAX_EXTENT_M` (refused here, naming the message), or a quaternion not a rotation."""
     p = getattr(msg_pose, "position", None) or getattr(msg_pose, "translation")
     q = getattr(msg_pose, "orientation", None) or getattr(msg_pose, "rotation")
     x, y = float(p.x), float(p.y)

@@ -1,8 +1,5 @@
-"""The small YAML files crfmap reads and writes (map_server map YAML, ``.npy`` sidecars).
-
-Reading is strict, with one-line errors naming the file and the key; numbers are written
-in the shortest text that reads back to the same float. Private to the package: the
-interfaces are :mod:`crfmap.io.map_server` and :mod:`crfmap.io.npy_grid`.
+"""The small YAML files crfmap reads and writes: read strictly, one-line errors naming file and key; numbers
+written in the shortest text that reads back to the same float.
 
 >>> format_number(0.05), format_number(2.0), format_number(1e-07)
 ('0.05', '2', '1.0e-07')
@@ -22,11 +19,8 @@ MAX_DEPTH = 20  # nesting of lists/mappings; the files crfmap reads nest 2 deep
 
 
 class _StrictLoader(yaml.SafeLoader):
-    """PyYAML's safe loader without aliases (``*a``: "billion laughs") and with a nesting limit.
-
-    The files crfmap reads (map YAML, sidecars, bag metadata) use neither; refusing them
-    keeps a small hostile file from taking minutes or gigabytes (or a RecursionError).
-    """
+    """PyYAML's safe loader without aliases ("billion laughs") and with a nesting limit: the files crfmap reads use
+    neither, and refusing them keeps a small hostile file from taking minutes or gigabytes."""
 
     depth = 0
 
@@ -111,12 +105,8 @@ def finite_number(value, source, key):
 
 
 def format_number(value) -> str:
-    """A float as YAML text that reads back to the same float.
-
-    yaml-cpp (nav2) prints ``0`` and ``0.05``; it uses 3 significant digits, which loses
-    origins like -12.3456 -- we print the shortest exact form instead (same text whenever
-    3 digits suffice). Exponents get a '.0' so PyYAML reads them as floats too.
-    """
+    """A float as YAML text that reads back to the same float (yaml-cpp's 3 digits would lose origins like -12.3456;
+    the text is nav2's whenever 3 digits suffice). Exponents get a '.0' so PyYAML reads them as floats."""
     text = repr(float(value))
     if "e" in text:
         mantissa, exponent = text.split("e")

@@ -1,10 +1,7 @@
 """Write files so that nothing is ever half-written: a temporary file, then a rename.
 
-While a temporary file exists, SIGTERM and SIGHUP (like SIGINT, Ctrl-C) raise :class:`Interrupted` in the main
-thread, so the ``except`` clauses below remove the temporary before the process ends (the default action of those
-signals would kill it on the spot and leave ``.name.xxxx.tmp`` behind). :func:`atomic_paths` replaces several files
-as one unit (an ``.npy`` array and its sidecar): a reader that takes :func:`unit_lock` never sees the array of one
-write and the sidecar of another.
+While a temporary exists, SIGTERM and SIGHUP (like SIGINT) raise :class:`Interrupted` in the main thread, so the
+clean-up removes it (their default action would kill the process and leave ``.name.xxxx.tmp`` behind).
 """
 from __future__ import annotations
 
@@ -59,10 +56,8 @@ def signals_raise():
 def _signals_deferred():
     """Hold SIGTERM/SIGHUP/SIGINT back while a temporary is created and registered for clean-up.
 
-    A signal arriving between ``mkstemp`` and the bookkeeping would otherwise leave the file behind.
-    Blocking it with ``pthread_sigmask`` is not enough (another thread, e.g. numba's, may take it and
-    Python still runs the handler in the main thread), so the handlers only note it here and the
-    handler in force runs, and raises, right after the block, when the clean-up knows the file.
+    ``pthread_sigmask`` is not enough (another thread, e.g. numba's, may take the signal and Python still runs the
+    handler in the main thread), so the handlers only note it and the one in force runs after the block.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -88,8 +83,8 @@ _RECORDERS = []  # lists that record_written() blocks collect each completed wri
 
 @contextlib.contextmanager
 def record_written():
-    """Inside the block, the list yielded collects the targets of every write completed by this module (files of
-    :func:`atomic_paths`, folders of :func:`atomic_dir`), so that a failure after them can say what was written.
+    """The list yielded collects the targets of every write this module completes in the block, so that a failure
+    after them can say what was written.
 
     >>> with record_written() as written:
     ...     pass
@@ -128,10 +123,8 @@ def _check_target(path: Path):
 
 @contextlib.contextmanager
 def unit_lock(folder, exclusive):
-    """An advisory lock on ``folder`` (flock on the folder itself: no lock file is left behind).
-
-    Writers of a multi-file unit hold it exclusively while renaming; readers share it while reading.
-    """
+    """An advisory flock on ``folder`` itself (no lock file left behind): writers of a multi-file unit hold it
+    exclusively while renaming, readers share it while reading."""
     try:
         fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
     except OSError:
@@ -149,13 +142,9 @@ def unit_lock(folder, exclusive):
 
 @contextlib.contextmanager
 def atomic_paths(*paths):
-    """Yield temporary paths beside ``paths``; on success rename all of them, as one unit.
+    """Yield temporary paths beside ``paths``; on success rename all of them, as one unit, under :func:`unit_lock`.
 
-    On an exception (or SIGTERM/SIGHUP/SIGINT) every temporary file is removed and the
-    targets are left untouched. The renames happen under :func:`unit_lock` of the folder.
-
-    >>> with atomic_paths("grid.npy", "grid.npy.yaml") as (a, b):  # doctest: +SKIP
-    ...     a.write_bytes(b"..."); b.write_text("...")
+    On an exception (or SIGTERM/SIGHUP/SIGINT) every temporary is removed and the targets are left untouched.
     """
     paths = [Path(p) for p in paths]
     for path in paths:
@@ -187,13 +176,7 @@ def atomic_paths(*paths):
 
 
 def atomic_path(path):
-    """Yield a temporary path beside ``path``; on success rename it onto ``path``.
-
-    On an exception (or SIGTERM/SIGHUP/SIGINT) the temporary file is removed and ``path`` is left untouched.
-
-    >>> with atomic_path("out.txt") as tmp:  # doctest: +SKIP
-    ...     Path(tmp).write_text("done")
-    """
+    """:func:`atomic_paths` of one file: yield a temporary path beside ``path``, renamed onto it on success."""
     return atomic_paths(path)
 
 
@@ -204,20 +187,15 @@ def is_bag_folder(path) -> bool:
 
 @contextlib.contextmanager
 def atomic_dir(path):
-    """Like :func:`atomic_path` for a folder (a ROS2 bag is a folder).
-
-    An existing ``path`` is replaced only if it is empty or a ROS 2 bag: never a folder of
-    the user's other files. A ``path`` that did not exist at the start and exists at the rename
-    (another writer's) is never replaced: FileExistsError naming it.
-    """
+    """Like :func:`atomic_path` for a folder (a ROS 2 bag). An existing ``path`` is replaced only if it is empty or a
+    ROS 2 bag; one that appeared while writing (another writer's) is never replaced: FileExistsError naming it."""
     path = Path(path)
     existed = path.exists() or path.is_symlink()
     if path.exists() and not (path.is_dir() and (is_bag_folder(path) or not any(path.iterdir()))):
         raise FileExistsError(17, "exists and is not a ROS 2 bag folder (or empty); not replacing it", str(path))
     with signals_raise():
         path.parent.mkdir(parents=True, exist_ok=True)
-        # The folder is written as <hidden temporary>/<final name>: writers name their files after
-        # the folder (rosbags: name.db3), so the bag holds the same names as a direct write would.
+        # written as <hidden temporary>/<final name>: writers name their files after the folder (name_0.db3)
         box = None
         try:
             with _signals_deferred():  # inside the try: a deferred signal raises where the clean-up sees box
@@ -225,8 +203,7 @@ def atomic_dir(path):
             tmp = box / path.name
             yield tmp
             _set_new_file_mode(tmp, path, folder=True)
-            # The check and the rename are one step under the parent's lock: of two writers of one new
-            # folder, the second finds the first's and refuses instead of replacing it.
+            # check and rename under one lock: of two writers of one new folder, the second refuses
             with unit_lock(path.parent, exclusive=True):
                 if not existed and (path.exists() or path.is_symlink()):
                     raise FileExistsError(17, "was created by another process while this one was writing it; "
@@ -271,11 +248,8 @@ def current_umask() -> int:
 
 
 def _set_new_file_mode(tmp, path, folder=False):
-    """Give ``tmp`` the mode ``path`` has (when replacing it), else 0666 (folders 0777) minus the umask.
-
-    map_saver, numpy and rosbag2 create files with plain open()/mkdir(), i.e. this mode;
-    mkstemp/mkdtemp's private 0600/0700 would hide maps and figures from other users and services.
-    """
+    """Give ``tmp`` the mode ``path`` has (when replacing it), else 0666 (folders 0777) minus the umask, as
+    map_saver's and rosbag2's plain open()/mkdir() do (mkstemp's 0600 would hide maps from other users)."""
     tmp = Path(tmp)
     if not tmp.exists():
         return

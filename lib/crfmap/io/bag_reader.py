@@ -1,14 +1,8 @@
-"""ROS1 and ROS2 bags <-> :class:`~crfmap.recording.Recording`, with ``rosbags`` (no ROS install).
+"""ROS 1 and ROS 2 bags -> :class:`~crfmap.recording.Recording`, with ``rosbags`` (no ROS install).
 
-Writing is :func:`crfmap.io.bag_writer.write_bag`: the topics below, as a ROS user expects them from a robot.
-
-Reading (:func:`read_bag`) places every scan in a fixed frame by composing the transform chain at the scan's header
-stamp (REP 105: map -> odom -> base_link -> laser), interpolating the moving transforms in time and applying the
-static mount from ``/tf_static``. Scans outside the pose track's time span are dropped and counted in
-``recording.meta``. Ranges are kept as recorded (REP 117 filtering is the grid builder's job).
-
-The pose algebra and the tf tree live in :mod:`crfmap.frames` (``compose``, ``inverse``, ``interpolate_poses``,
-``wrap_angle``); building and decoding the messages themselves is :mod:`crfmap.io._rosmsgs`.
+Every scan is placed in a fixed frame by composing the transform chain at its header stamp (REP 105: map -> odom ->
+base_link -> laser; :class:`crfmap.frames.TfTree`). Ranges are kept as recorded (REP 117 filtering is the grid
+builder's job). Writing is :mod:`crfmap.io.bag_writer`.
 """
 from __future__ import annotations
 
@@ -70,8 +64,7 @@ def _starts_with(path, magic: bytes) -> bool:
 
 
 def _check_metadata(path, metadata):
-    """Read a ROS2 bag's metadata.yaml strictly first (no aliases, bounded size and nesting), so that a
-    hostile one is refused in one line instead of hanging or exhausting the reader."""
+    """Read a ROS2 bag's metadata.yaml strictly first: a hostile one is refused in one line, not hanging the reader."""
     try:
         doc = load_text(read_text_file(metadata, "ROS2 bag metadata (metadata.yaml)"), metadata)
     except InputError as exc:
@@ -100,9 +93,8 @@ READER_MODULES = ("rosbags", "backports", "compression", "lz4")  # rosbags and i
 def raised_by_reader(exc: BaseException) -> bool:
     """Whether ``exc`` (an Exception) came out of the bag-reading libraries: its innermost Python frame is theirs.
 
-    A bag they cannot decode makes them raise what no list names: ``ZstdError`` for a metadata.yaml claiming
-    zstd on an uncompressed bag, ``TypeError`` from ``ord()`` for an ``.mcap`` of its magic bytes alone. Those
-    are the bag's fault; the same exception from crfmap's own code is not, and stays a traceback.
+    A bag they cannot decode makes them raise what no list names (``ZstdError``, ``TypeError``): the bag's fault.
+    The same exception from crfmap's own code is not, and stays a traceback.
 
     >>> raised_by_reader(ValueError("x"))  # never raised: no frame at all
     False
@@ -265,12 +257,8 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
     messages, ``"truth"`` ``/ground_truth_pose``; ``"auto"`` takes the first available in that order.
     ``laser_mount`` (x, y, yaw): the laser's pose on the robot, overriding ``/tf_static``.
 
-    The :class:`~crfmap.recording.Recording`'s ``scans.laser_poses`` are in the fixed frame (``scans.frame_id``: map or
-    odom); its ``meta`` says which pose source was used and how many scans were dropped.
-
-    >>> rec = read_bag(data_file("rosbags/olin_comprobo24_turtlebot4/macfirst_floor_take_2"))  # doctest: +SKIP
-    >>> rec.laser_mount  # doctest: +SKIP
-    (0.00393584, 0.0, 1.5707963267948966)
+    ``scans.laser_poses`` are in the fixed frame (``scans.frame_id``: map or odom); scans outside the pose track's
+    time span are dropped; ``meta`` says which pose source was used and how many scans were dropped.
     """
     path = check_path_arg(path, "bag file or folder")
     if pose_source not in POSE_SOURCES:

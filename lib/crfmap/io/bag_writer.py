@@ -1,23 +1,12 @@
-"""Write a :class:`~crfmap.recording.Recording` as a ROS1 or ROS2 bag, with ``rosbags`` (no ROS install).
+"""Write a :class:`~crfmap.recording.Recording` as a ROS 1 or ROS 2 bag, with ``rosbags`` (no ROS install).
 
-:func:`write_bag` produces the topics a ROS user expects from a robot: ``/scan`` (sensor_msgs/LaserScan in the laser
-frame), ``/odom`` (nav_msgs/Odometry, odom -> base_link with twist), ``/cmd_vel`` (geometry_msgs/Twist), ``/tf``
-(map -> odom and odom -> base_link), ``/tf_static`` (base_link -> laser), and, when known, ``/ground_truth_pose``
-(geometry_msgs/PoseStamped, base_link in map) and ``/map`` (nav_msgs/OccupancyGrid of the ground truth). Reading
-them back is :func:`crfmap.io.bag_reader.read_bag` (``write_bag`` is importable from there too).
+The topics a ROS user expects from a robot: ``/scan`` (LaserScan in the laser frame), ``/odom`` (odom -> base_link
+with twist), ``/cmd_vel``, ``/tf`` (map -> odom, odom -> base_link), ``/tf_static`` (base_link -> laser), and when
+known ``/ground_truth_pose`` (base_link in map) and ``/map`` (the ground truth). ``/tf_static`` and ``/map`` are
+latched (transient local), so a player's late subscriber still gets the laser mount and the map. The files are laid
+out as rosbag2 (:mod:`crfmap.io.rosbag2_files`) or rosbag (:mod:`crfmap.io.rosbag1_files`) writes them.
 
-ROS 2 bags are written as ``ros2 bag record`` would: a folder ``NAME`` holding ``metadata.yaml``
-and one data file ``NAME_0.mcap`` (MCAP, the default storage since Jazzy) or ``NAME_0.db3``
-(sqlite3, Humble's default); ``/tf_static`` and ``/map`` are offered transient-local (latched), so a
-player's late subscriber still gets the laser mount and the map (ROS 1 bags: latching=1). The files
-are laid out as the chosen distro's rosbag2 writes them (:mod:`crfmap.io.rosbag2_files`: Humble's
-metadata version 5 and sqlite3 schema 3, or Jazzy's version 9 and schema 4); a ROS 1 bag's header
-record as rosbag writes it (:mod:`crfmap.io.rosbag1_files`), so ``rosbag reindex`` and append keep it.
-
-No message carries time 0 (as log time or header stamp): ROS reads a stamp of 0 as "no time" (tf2
-looks up the latest transform, ``rosbag play`` starts at 1 ns and skips it), so :func:`write_bag`
-refuses a recording with one; the simulator starts its clock at
-:data:`crfmap.sim.simulator.START_TIME` and ``crfmap convert`` shifts bags that start at 0.
+No message carries time 0: ROS reads it as "no time" (tf2 looks up the latest transform, ``rosbag play`` skips it).
 """
 from __future__ import annotations
 
@@ -63,7 +52,7 @@ def _check_recording(recording, name):
 
 
 STORAGES = ("mcap", "sqlite3")
-DISTROS = {"humble": 5, "jazzy": 9}  # the rosbag2 metadata version each writes
+DISTROS = ("humble", "jazzy")
 LATCHED_TOPICS = (TF_STATIC_TOPIC, MAP_TOPIC)
 
 
@@ -78,21 +67,14 @@ def offered_qos(topic):
 
 
 def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble", progress=False):
-    """Write a :class:`~crfmap.recording.Recording` as a ROS2 bag folder or a ROS1 ``.bag`` file.
+    """Write ``recording`` as a ROS 2 bag folder ``path`` (replaced if present) or a ROS 1 file ending in ``.bag``.
 
-    ``path``: ROS2 (``fmt="ros2"``): a folder (created; replaced if present); ROS1: a file ending in ``.bag``.
-    ``storage``: the ROS2 storage plugin, ``"mcap"`` or ``"sqlite3"`` (data file ``NAME_0.mcap`` or ``NAME_0.db3``).
-    ``distro``: the rosbag2 whose files to write: ``"humble"``'s (default; metadata version 5, sqlite3 schema 3; every
-    later rosbag2 reads them) or ``"jazzy"``'s (version 9, schema 4; Humble cannot read them). ``progress``: a tqdm bar
-    of the messages written (seconds for a log of a few thousand scans).
+    ``storage``: ``"mcap"`` or ``"sqlite3"`` (``NAME_0.mcap`` / ``NAME_0.db3``). ``distro``: whose rosbag2 files to
+    write: ``"humble"`` (every later rosbag2 reads them) or ``"jazzy"`` (Humble cannot). ``progress``: a tqdm bar.
 
-    ``/tf`` holds odom -> base_link at every odometry stamp (and at every scan stamp, interpolated) and map -> odom at
-    every scan stamp, chosen so that map -> odom -> base_link -> laser is exactly the recorded laser pose of each scan.
-    Without odometry, map -> odom is the identity and odom -> base_link the true pose.
-
-    >>> write_bag(recording, "/tmp/run_bag", fmt="ros2")  # doctest: +SKIP
-    >>> read_bag("/tmp/run_bag").scans.ranges.shape  # doctest: +SKIP
-    (120, 360)
+    ``/tf`` holds odom -> base_link at every odometry and scan stamp (interpolated) and map -> odom at every scan
+    stamp, so that map -> odom -> base_link -> laser is exactly each scan's recorded laser pose. Without odometry,
+    map -> odom is the identity and odom -> base_link the true pose. InputError for a message at time 0.
     """
     path = Path(path)
     if fmt not in ("ros2", "ros1"):
@@ -165,10 +147,8 @@ def _write_all(writer, messages, store, serialize):
 
 
 def clashing_scans(scans: ScanSet, laser_mount=(0.0, 0.0, 0.0)) -> list:
-    """Pairs (i, j) of scans whose stamps are the same nanosecond but whose robot poses differ.
-
-    A bag's tf tree holds one pose per time, so such a recording cannot be written (all-zero or
-    repeated stamps in a log; :func:`crfmap.commands.convert.stamps_from_order` restamps them).
+    """Pairs (i, j) of scans stamped the same nanosecond at different robot poses: a bag's tf tree, one pose per
+    time, cannot hold them.
 
     >>> s = ScanSet(np.ones((3, 1), np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.0, 0, 0], [1, 0, 0], [1, 0, 0]]),
     ...             np.array([0.0, 0.0, 1.0]))
@@ -219,8 +199,6 @@ def _recording_messages(recording, scans, make):
                         make.odometry(int(ns), odom_frame, base_frame, odom.poses[j], twists[j, 0], twists[j, 1])))
         t0 = min(t0, int(odom_ns.min()))
     if odom is not None and not scans_in_odom:
-        # odom -> base_link is the odometry (interpolated at the scan stamps too, so /tf covers
-        # every scan); map -> odom at each scan closes the chain onto the recorded laser pose.
         for j, ns in enumerate(odom_ns):
             odom_knots[int(ns)] = np.asarray(odom.poses[j], np.float64)
         ref = int(odom_ns.min())

@@ -7,23 +7,12 @@ A CARMEN log is text, one message per line (optionally gzip-compressed)::
     PARAM  name value ...
 
 The n beams span 180 degrees counter-clockwise from the robot's right: ``angle_k = -pi/2 + k * pi / (n - 1)``. In
-the "corrected" logs both pose triples of a FLASER line hold the SLAM-corrected pose, which we use as the laser pose
-(a zero laser mount; ``robot_frontlaser_offset`` is 0 in these logs and is kept in ``meta``). ODOM lines are the raw
-odometry track, cleaned of corrupt stamps (:func:`clean_odometry_stamps`: records stamped 0 or not after the
-previous one are dropped, with one warning saying how many) and checked for moves the stamps cannot explain
-(:func:`odometry_jumps`: kept, with a warning). FLASER lines keep their stamps as logged (a few run back by a tenth
-of a second; a bag orders them by time, and each is its own /tf knot, so the scans still resolve to their poses).
-Other message types (NEFF, SYNC, ...) are skipped and counted.
+the "corrected" logs both pose triples of a FLASER line hold the SLAM-corrected pose, our laser pose (zero mount).
+ODOM lines are the raw odometry track. FLASER lines keep their stamps as logged (a few run back by a tenth of a
+second: each is its own /tf knot, so the scans still resolve to their poses). Other messages are skipped and counted.
 
-No returns. A SICK scanner reports "nothing returned" as a reading at or beyond its maximum range, and not as one
-exact number: 81.83 m in Intel, 50.00 m in ACES, and 81.87, 81.89 and 81.91 m mixed in one file in other public
-logs. Readings at or beyond the laser's maximum range become ``+inf`` (REP 117 "no return"), never hits. The maximum
-range is, in this order: the ``max_range`` argument (``crfmap build --max-range``); the log's ``PARAM
-robot_front_laser_max``; else what :func:`no_return_rule` finds in the readings (the one rule, with its reason in
-``meta["max_range_source"]``): beyond 80 m (a SICK LMS's limit) every reading is a code; else a pile of readings
-within a few cm of each other at the top, far denser than the half metre below it, is a set of codes (a stray value
-above them too). A pile that looks like codes but is not taken is said in one warning naming ``--max-range``. A log
-whose longest reading is a real wall keeps it as a hit.
+Readings at or beyond the laser's maximum range are "no return" codes (not one exact number: 81.83 m in Intel,
+50.00 m in ACES) and become ``+inf`` (REP 117), never hits: see :mod:`crfmap.io.no_return`.
 """
 from __future__ import annotations
 
@@ -132,9 +121,8 @@ _UNSET = object()
 def clean_odometry_stamps(stamps) -> np.ndarray:
     """Which odometry records to keep: a stamp above 0 ns and above every earlier kept one.
 
-    The Intel log has ODOM lines stamped 0 (and 1e-153) among its real ones, and stamps that run
-    back by up to seconds; as ROS messages they would be odometry at "no time" (t = 0) and tf
-    going back in time. The first record of a run wins; later ones at or before it are dropped.
+    Logs have corrupt ODOM stamps (0, or running back by seconds): as ROS messages, odometry at "no time" and tf
+    going back in time.
 
     >>> clean_odometry_stamps(np.array([0.5, 0.0, 0.7, 0.6, 0.7, 0.9])).tolist()
     [True, False, True, False, False, True]
@@ -163,19 +151,13 @@ def odometry_jumps(stamps, poses) -> np.ndarray:
 def read_carmen(path, max_range="auto", no_return=_UNSET, warn=True) -> Recording:
     """Read a CARMEN log (plain or gzip, detected from the content) into a :class:`~crfmap.recording.Recording`.
 
-    ``max_range`` [m]: readings at or beyond it (less ``NO_RETURN_TOLERANCE``) are no-returns and become ``+inf``;
-    ``"auto"``: the log's ``PARAM robot_front_laser_max``, else :func:`crfmap.io.no_return.no_return_rule`; None keeps
-    every reading as it is. ``no_return``: the older name of ``max_range`` (used when given). ``warn``: warn (one line
-    each) of dropped ODOM records and of moves their stamps cannot explain; the counts are in ``meta`` either way
-    (callers that use only the scans pass False).
+    ``max_range`` [m]: readings at or beyond it (less ``NO_RETURN_TOLERANCE``) become ``+inf``; ``"auto"``: the log's
+    ``PARAM robot_front_laser_max``, else :func:`crfmap.io.no_return.no_return_rule`; None keeps every reading.
+    ``no_return``: the older name of ``max_range``. ``warn``: warn of dropped ODOM records
+    (:func:`clean_odometry_stamps`) and of moves their stamps cannot explain (:func:`odometry_jumps`, kept).
 
-    The recording holds ``scans`` (laser poses = corrected FLASER poses in ``map``), ``true_poses`` (the same poses as
-    base_link in map), ``odometry`` (ODOM lines, with twists) and ``meta`` (PARAM values, counts, the maximum range and
-    where it came from, ODOM records dropped and jumps warned of).
-
-    >>> rec = read_carmen(data_file("carmen/intel-corrected.log.gz"))  # doctest: +SKIP
-    >>> rec.scans.ranges.shape  # doctest: +SKIP
-    (910, 180)
+    ``scans`` and ``true_poses`` hold the corrected FLASER poses in ``map``, ``odometry`` the ODOM lines with twists;
+    ``meta`` the PARAM values, counts, the maximum range and where it came from.
     """
     path = check_path_arg(path, "CARMEN log file name", file=True)
     text = _read_text(path)

@@ -21,13 +21,9 @@ def _kind(path):
 
 
 def load_grid(path, *, free_thresh=None, occupied_thresh=None, loader=None) -> OccupancyGrid:
-    """Load a grid by suffix: ``.yaml``/``.yml`` -> :func:`load_map`, ``.npy`` -> :func:`load_npy`.
-
-    An ``.npy`` grid's sidecar (``x.npy.yaml``) loads the ``x.npy`` it describes. The thresholds override a map
-    YAML's (see :func:`load_map`); an ``.npy`` grid has none, so giving them for one is an error. ``loader``
-    (``"jazzy"``/``"humble"``) picks nav2's rules for a map YAML (default: the current nav2). A grid reaching beyond
-    :data:`crfmap.checks.MAX_EXTENT_M` metres (resolution 1e308, say) is refused.
-    """
+    """Load a grid by suffix: ``.yaml``/``.yml`` -> :func:`load_map` (with the thresholds and ``loader``), ``.npy`` or
+    its sidecar ``x.npy.yaml`` -> :func:`load_npy` (thresholds are an error). A grid reaching beyond
+    :data:`crfmap.grid.MAX_EXTENT_M` metres is refused."""
     path = check_path_arg(path, "grid file name (.yaml or .npy)", file=True)
     kind = _kind(path)
     if kind != "map" and (free_thresh is not None or occupied_thresh is not None):

@@ -1,10 +1,5 @@
-"""Checks on a map image made from its header, before any pixel is decoded.
-
-A 20000 x 20000 PNG of a few kilobytes would otherwise take 8 GB and most of a minute to decode before anything
-could object. :func:`check_map_image` reads only the header: the image must be a regular file (a FIFO would block
-the reader) no larger than :func:`crfmap.checks.max_cells` pixels (raise it with ``crfmap --max-cells N`` or
-``$CRFMAP_MAX_CELLS``; above 178 million pixels Pillow's own bomb limit still applies). A float image (TIFF mode
-``F``) must hold finite values: NaN has no occupancy.
+"""Checks on a map image from its header, before any pixel is decoded: a PNG of a few kilobytes can take gigabytes
+and a minute to decode. The limit is :func:`crfmap.checks.max_cells` (``crfmap --max-cells N``).
 """
 from __future__ import annotations
 
@@ -18,9 +13,8 @@ from crfmap.errors import InputError
 
 
 def check_map_image(image_path, context=""):
-    """InputError naming ``image_path`` if it is not a regular file, too large, or a float image with NaN/Inf.
-
-    Unreadable or unidentified images pass: the loader reports those in its own words.
+    """InputError naming ``image_path`` if it is not a regular file (a FIFO would block the reader), too large, or a
+    float image with NaN/Inf. Unreadable images pass: the loader words those.
 
     >>> check_map_image("/dev/null")
     Traceback (most recent call last):

@@ -1,23 +1,10 @@
-"""Occupancy grids as files: ROS map_server maps (YAML + image) and exact ``.npy`` grids.
+"""ROS map_server maps: a YAML file (``image, mode, resolution, origin [x, y, yaw], negate, occupied_thresh,
+free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads loads).
 
-map_server maps
-    A YAML file (``image, mode, resolution, origin [x, y, yaw], negate, occupied_thresh,
-    free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads loads).
-    Loading follows **nav2_map_server**'s ``map_io.cpp`` (``loadMapYaml`` +
-    ``loadMapFromFile``) value for value, Jazzy+'s rules by default or Humble's
-    (:mod:`crfmap.io.nav2_loader`); saving follows its ``saveMapToFile``. Where ROS 1's
-    ``map_server`` (``image_loader.cpp``, ``map_saver.cpp``) differs, the docstrings say so.
-    A loaded grid holds the OccupancyGrid values the map server would publish, divided by
-    100 (unknown, -1, becomes 0.5).
-
-``.npy`` grids (:mod:`crfmap.io.npy_grid`: ``save_npy``, ``load_npy``, ``npy_sidecar_path``)
-    The float P(occupied) array itself, bit for bit, plus a small sidecar YAML
-    ``<name>.npy.yaml`` holding resolution, origin and frame_id (a plain ``.npy`` cannot).
-
-:func:`crfmap.io.grid_files.load_grid` / ``save_grid`` choose by suffix (``.yaml``/``.yml`` or ``.npy``).
-
->>> grid = load_grid("map.yaml")                    # doctest: +SKIP
->>> save_grid(grid, "copy.yaml", mode="scale")      # doctest: +SKIP
+Loading follows nav2_map_server's ``map_io.cpp`` (``loadMapYaml`` + ``loadMapFromFile``) value for value, with
+Jazzy+'s or Humble's pixel rules (:mod:`crfmap.io.nav2_loader`); saving follows its ``saveMapToFile``. A loaded grid
+holds the OccupancyGrid values map_server would publish, divided by 100 (unknown, -1, becomes 0.5). Exact grids are
+``.npy`` files (:mod:`crfmap.io.npy_grid`); :mod:`crfmap.io.grid_files` chooses by suffix.
 """
 from __future__ import annotations
 
@@ -44,10 +31,8 @@ IMAGE_FORMATS = ("pgm", "png")
 # Pixel values both map savers write in trinary mode.
 FREE_PIXEL, OCCUPIED_PIXEL, UNKNOWN_PIXEL = 254, 0, 205
 
-# Save defaults: map_saver's. occupied 0.65 everywhere. For free, Humble's map_saver writes its
-# threshold (default 0.25), under which its own loader reads the unknown pixel 205
-# (occ = 50/255 = 0.196) as *free* (slam_toolbox issue #587); since Jazzy (navigation2 PR #5278)
-# a trinary YAML always says 0.65 / 0.196, as ROS 1's map_saver does: 205 stays unknown.
+# Save defaults: map_saver's since Jazzy (navigation2 PR #5278) and ROS 1's. Humble's free 0.25 would read its own
+# unknown pixel 205 (occ = 50/255 = 0.196) as free (slam_toolbox issue #587).
 OCCUPIED_THRESH_DEFAULT = 0.65
 FREE_THRESH_DEFAULT = 0.196
 # Scale mode with thresholds 0 and 1 makes nav2's grey image lossless: occ = value / 100.
@@ -69,17 +54,11 @@ def _check_thresholds(occupied, free, source):
 
 
 def read_map_yaml(yaml_path) -> dict:
-    """Parse and check a map_server YAML file, as nav2's ``loadMapYaml`` does.
+    """Parse and check a map_server YAML file, as nav2's ``loadMapYaml`` does; all keys but ``mode`` are required.
 
-    Returns a dict with ``image`` (as written), ``image_path`` (resolved: relative names
-    are relative to the YAML's folder), ``resolution``, ``origin`` (3 floats), ``negate``
-    (0/1), ``occupied_thresh``, ``free_thresh``, ``mode`` (default ``"trinary"``) and
-    ``extra`` (any other keys). All keys but ``mode`` are required, as in nav2 and ROS 1.
-    Stricter than nav2: ``negate`` must be 0/1/true/false, thresholds must lie in [0, 1]
-    with free < occupied, resolution must be positive.
-
-    >>> read_map_yaml("map.yaml")["resolution"]  # doctest: +SKIP
-    0.05
+    Returns the keys (``origin`` as 3 floats, ``negate`` 0/1, ``mode`` default ``"trinary"``), plus ``image_path``
+    (relative to the YAML's folder) and ``extra`` (any other keys). Stricter than nav2: ``negate`` must be
+    0/1/true/false, thresholds lie in [0, 1] with free < occupied, resolution is positive.
     """
     path = check_path_arg(yaml_path, "map YAML file name", file=True)
     doc = read_mapping(path, "map YAML file")
@@ -148,36 +127,21 @@ def _optional_thresh(name, value):
     """A threshold argument: None (the file's) or a number in [0, 1]; InputError naming ``name`` otherwise."""
     if value is None:
         return None
-
     return check_number(name, value, low=0.0, high=1.0)
 
 
 def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAULT_LOADER) -> OccupancyGrid:
     """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
 
-    ``loader``: ``"jazzy"`` (default: Jazzy, Kilted, Rolling) or ``"humble"``; their per-pixel rules differ (luma vs
-    channel mean, ``>=`` vs ``>``, alpha handling, float32): see :mod:`crfmap.io.nav2_loader`. Roughly: ``occ = 1 -
-    brightness`` (``brightness`` if ``negate``); trinary: occupied above ``occupied_thresh`` -> 100, below
-    ``free_thresh`` -> 0, else -1; scale puts ``round((occ - free) / (occupied - free) * 100)`` in between; raw
-    takes the grey level as the value. The top image row is the highest y (row flip); cell (0, 0) sits at
-    ``origin``. A value of 50 loads as P just above 0.5, so that it stays a known 50 (crfmap's P = 0.5 means
-    unknown).
+    ``loader``: ``"jazzy"`` (default: Jazzy, Kilted, Rolling) or ``"humble"``, whose per-pixel rules differ
+    (:mod:`crfmap.io.nav2_loader`). The top image row is the highest y; cell (0, 0) sits at ``origin``. A value of 50
+    loads as P just above 0.5, so that it stays a known 50 (crfmap's P = 0.5 means unknown).
 
-    ``occupied_thresh`` / ``free_thresh`` override the file's thresholds (loading only;
-    ``grid.meta`` keeps the file's values). Example: maps written by nav2 carry
-    ``free_thresh: 0.25``, under which their unknown pixels (205) load as free, as in nav2;
-    ``free_thresh=0.196`` (map_saver's value since Jazzy, and ROS 1's) keeps them unknown.
+    ``occupied_thresh`` / ``free_thresh`` override the file's (loading only): e.g. ``free_thresh=0.196`` keeps the
+    unknown pixels (205) of a Humble map (``free_thresh: 0.25``) unknown. ``grid.meta`` holds the YAML's keys as
+    stated, plus ``source``, ``image_path`` and ``loader``, so that :func:`save_map` can write the same kind of map.
 
-    ``grid.meta`` holds ``image, mode, negate, occupied_thresh, free_thresh`` as the YAML
-    states them, plus ``source`` (the YAML path), ``image_path``, ``loader`` and any extra
-    YAML keys, so that :func:`save_map` can write the same kind of map back.
-
-    Raises :class:`InputError` naming the file for a missing/unparsable YAML, a missing
-    or ill-typed key, an unknown mode, and a missing, unreadable, truncated or empty image.
-
-    >>> grid = load_map("map.yaml")          # doctest: +SKIP
-    >>> grid.to_int8()[0, :3]                # doctest: +SKIP
-    array([-1, -1,  0], dtype=int8)
+    InputError naming the file for a missing or bad YAML or key, and a missing, unreadable, truncated or empty image.
     """
     if loader not in LOADERS:
         raise InputError("--loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
@@ -306,30 +270,15 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
              image_format=None, saver="humble"):
     """Write ``grid`` as a map_server map, as nav2's map_saver does; returns (yaml_path, image_path).
 
-    The image is ``<yaml stem>.<image_format>`` beside the YAML, named in it without a
-    folder; ``negate`` is always 0. Cell values are ``grid.to_int8()`` (P rounded to
-    percent; exactly 0.5 is unknown). Both files are written atomically, image first.
+    The image is ``<yaml stem>.<image_format>`` beside the YAML; ``negate`` is 0; cells are ``grid.to_int8()``.
+    Defaults (``None``): ``mode`` and, for the same mode, thresholds and image format from ``grid.meta`` (a loaded map
+    writes back unchanged), else trinary, 0.65 / 0.196 and pgm. Scale uses 1.0 / 0.0, which makes the grey image
+    lossless (every int8 value reloads exactly), and png: only PNG keeps the alpha that marks unknown (a scale PGM's
+    unknown reloads as 50, P = 0.5). A trinary map reloads unchanged when ``free_thresh <= 0.196`` and
+    ``occupied_thresh < 1``.
 
-    Defaults (``None``): ``mode`` from ``grid.meta`` (a loaded map's) else ``"trinary"``. Thresholds: trinary/raw
-    reuse ``grid.meta``'s when it has the same mode (so a loaded map writes back unchanged), else 0.65 / 0.196 (ROS
-    1 map_saver's YAML values: nav2's 0.25 would make its own loader read unknown 205 as free). Scale uses 1.0 /
-    0.0, which makes nav2's grey image lossless: reloading gives every int8 value back exactly, i.e. P back to
-    within 0.005 (half a percent step). Explicit scale thresholds write nav2's image unchanged, and map_server then
-    stretches values between them, as it does for nav2's own files. ``image_format``: the loaded map's, else png for
-    scale (nav2's choice: only PNG keeps the alpha that marks unknown) and pgm otherwise. A scale PGM loses the
-    alpha; unknown cells are grey 128 there and reload as 50, i.e. P = 0.5, still unknown in crfmap's convention
-    (map_server publishes 50, not -1).
-
-    A trinary map reloads to the same int8 values when ``free_thresh <= 0.196`` and
-    ``occupied_thresh < 1`` (the loader's view of 254, 205 and 0).
-
-    ``saver``: ``"humble"`` writes the thresholds used into the YAML, as Humble's map_saver
-    does; ``"jazzy"`` writes a trinary YAML with 0.65 / 0.196 whatever thresholds classified
-    the cells, as map_saver does since Jazzy (navigation2 PR #5278): those are the thresholds
-    that read its pixels 0 / 205 / 254 back as occupied / unknown / free.
-
-    >>> save_map(grid, "out/map.yaml", mode="scale")  # doctest: +SKIP
-    (PosixPath('out/map.yaml'), PosixPath('out/map.png'))
+    ``saver``: ``"humble"`` writes the thresholds used into the YAML, as Humble's map_saver does; ``"jazzy"`` writes a
+    trinary YAML with 0.65 / 0.196 whatever classified the cells (map_saver since navigation2 PR #5278).
     """
     yaml_path = Path(yaml_path)
     if yaml_path.suffix.lower() not in MAP_SUFFIXES:
@@ -346,13 +295,11 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
     yaml_occ, yaml_free = (OCCUPIED_THRESH_DEFAULT, FREE_THRESH_DEFAULT) if (
         saver == "jazzy" and mode == "trinary") else (occ, free)
     text = map_yaml_text(image_path.name, mode, grid.resolution, grid.origin, yaml_occ, yaml_free)
-    # One unit (crfmap.io.atomic.atomic_paths): both temporaries are written, then renamed together under
-    # the folder's lock, so concurrent writers leave one writer's image with that writer's YAML.
+    # renamed as one unit: concurrent writers leave one writer's image with that writer's YAML
     with atomic_paths(image_path, yaml_path) as (tmp_image, tmp_yaml):
         _write_image(tmp_image, grey, alpha, image_format)
         _write_text(tmp_yaml, text)
     return yaml_path, image_path
-
 
 
 __all__ = [

@@ -8,8 +8,8 @@ with nav2's defaults (``lethal_cost_threshold`` 100, ``trinary_costmap`` true,
 - ``value >= lethal_cost_threshold`` -> LETHAL_OBSTACLE (254);
 - otherwise FREE (0) in a trinary costmap, else ``value / lethal_threshold * 254`` (truncated).
 
-Rolling (2025+) adds ``inscribed_obstacle_cost_value`` (99 -> INSCRIBED, 253); Humble, Jazzy and
-Kilted do not: pass ``inscribed_value=99`` to model it. ROS 1's costmap_2d is the same rule.
+Rolling adds ``inscribed_obstacle_cost_value`` (99 -> INSCRIBED, 253): ``inscribed_value=99`` models it.
+ROS 1's costmap_2d is the same rule.
 
 >>> import numpy as np
 >>> static_layer_costs(np.array([[-1, 0, 64, 99, 100]], np.int8)).tolist()
@@ -39,11 +39,7 @@ def static_layer_costs(values, lethal_threshold=100, trinary=True, unknown_cost_
 
 
 def nav2_counts(values, **costmap_options) -> dict:
-    """Cells lethal, free and unknown in nav2's costmap (defaults: see the module doc).
-
-    ``occupied`` counts LETHAL_OBSTACLE, ``unknown`` NO_INFORMATION, ``free`` the rest
-    (FREE_SPACE, or scaled costs when ``trinary=False``).
-    """
+    """Cells LETHAL_OBSTACLE (``occupied``), NO_INFORMATION (``unknown``) and the rest (``free``) in nav2's costmap."""
     costs = static_layer_costs(values, **costmap_options)
     occupied = int((costs == LETHAL_OBSTACLE).sum())
     unknown = int((costs == NO_INFORMATION).sum())

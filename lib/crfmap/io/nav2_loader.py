@@ -4,21 +4,15 @@ Both read the image with GraphicsMagick built with 16-bit quanta (Q16): every ch
 8-bit value v becomes 257 v). From there they differ (``nav2_map_server/src/map_io.cpp``, ``loadMapFromFile``):
 
 Humble (per pixel, double precision)
-    ``shade`` = mean of R, G, B quanta (plus ``MaxRGB - opacity`` in trinary mode when the
-    image has an alpha channel) / 65535; ``occ = shade`` if ``negate`` else ``1 - shade``.
-    Trinary: ``occupied_thresh < occ`` -> 100, ``occ < free_thresh`` -> 0, else -1.
-    Scale: not fully opaque -> -1, then as trinary, values between become
-    ``rint((occ - free) / (occupied - free) * 100)``. Raw: ``round(shade * 255)`` if in 0..100.
+    ``shade`` = mean of R, G, B quanta (plus ``MaxRGB - opacity`` in trinary mode with alpha) / 65535; ``occ =
+    shade`` if ``negate`` else ``1 - shade``. Trinary: ``occupied_thresh < occ`` -> 100, ``occ < free_thresh`` -> 0,
+    else -1. Scale: not fully opaque -> -1, values between ``rint((occ - free) / (occupied - free) * 100)``. Raw:
+    ``round(shade * 255)`` if in 0..100.
 Jazzy and later (Eigen, float32)
-    The image is made grey by GraphicsMagick (``GrayscaleType``: Rec. 601 luma
-    ``(306 R + 601 G + 117 B) >> 10`` on the quanta) and exported as 8 bits
-    (``quantum / 257``, truncated); ``normalized = grey / 255.0f``; ``occ = 1 - normalized``
-    unless ``negate``. ``occ >= occupied_thresh`` -> 100, ``occ <= free_thresh`` -> 0 (free
-    wins if both), else -1; scale mode puts ``round((occ - free) / (occupied - free) * 100)``
-    strictly between. Any alpha below 255 (8-bit) makes the cell -1, in trinary and scale
-    mode alike. Raw: the 8-bit grey if in 0..100, else -1. Thresholds are compared as float32.
-
-Values come out in image row order (top row first), as int8 OccupancyGrid data.
+    Rec. 601 luma ``(306 R + 601 G + 117 B) >> 10`` on the quanta, exported as 8 bits (``quantum / 257``);
+    ``occ = 1 - grey / 255.0f`` unless ``negate``. ``occ >= occupied_thresh`` -> 100, ``occ <= free_thresh`` -> 0
+    (free wins), else -1; scale: ``round(...)`` strictly between. Any alpha below 255 -> -1. Raw: the grey if in
+    0..100, else -1. Thresholds are compared as float32.
 
 >>> import numpy as np
 >>> px = Pixels.from_grey8(np.array([[0, 205, 254]], np.uint8))
@@ -158,7 +152,7 @@ def _jazzy(px, mode, negate, occupied_thresh, free_thresh):
 
 
 def occupancy(px: Pixels, mode, negate, occupied_thresh, free_thresh, loader=DEFAULT_LOADER) -> np.ndarray:
-    """int8 OccupancyGrid values of ``px`` (image row order) under ``loader``'s rules (see module doc)."""
+    """int8 OccupancyGrid values of ``px`` (image row order: top row first) under ``loader``'s rules."""
     if loader not in LOADERS:
         raise InputError("loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
     rule = _humble if loader == "humble" else _jazzy

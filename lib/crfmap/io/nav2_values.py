@@ -1,11 +1,7 @@
 """What nav2 reads from a map crfmap makes: the OccupancyGrid values map_server publishes from the trinary file.
 
-``crfmap infer`` writes map_saver's trinary map (lethal where P rounds to >= 0.65, free where it rounds to <= 0.196,
-else unknown). nav2's map_server loads it as 100 / 0 / -1, and the costmap's static layer (``trinary_costmap: true``,
-``lethal_cost_threshold: 100``, its defaults) makes 100 lethal, -1 unknown and every other value FREE: a map
-published with percent values 0..100 (what ``OccupancyGrid.to_int8`` gives) would have nav2 drive through every
-cell below 100. :func:`nav2_values` is the chain the file goes through, cell by cell, so the live node publishes what
-map_server would publish from ``crfmap infer``'s file, and the navigation metrics score what nav2 reads.
+nav2's costmap (``trinary_costmap: true``, ``lethal_cost_threshold: 100``) reads every value below 100 as free, so
+a map published in percent would open every wall; the live node publishes, and the navigation metrics score, these.
 """
 from __future__ import annotations
 
@@ -32,9 +28,8 @@ def _value_table(loader: str) -> np.ndarray:
 
 
 def nav2_values(probability, loader: str = DEFAULT_LOADER) -> np.ndarray:
-    """int8 [y, x]: what nav2's map_server publishes from the trinary map of P that ``crfmap infer`` writes.
-
-    100 lethal, 0 free, -1 unknown (see the module doc; ``loader``: ``"jazzy"`` or ``"humble"``).
+    """int8 [y, x]: what nav2's map_server (``loader``'s rules) publishes from the trinary map of P that ``crfmap
+    infer`` writes: 100 lethal, 0 free, -1 unknown.
 
     >>> nav2_values(np.array([[0.645, 0.6451, 0.205, 0.2051, 0.5]])).tolist()
     [[-1, 100, 0, -1, -1]]

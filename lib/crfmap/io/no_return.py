@@ -1,9 +1,8 @@
-"""Which readings of a laser log are no-return codes, not hits: one rule with its reasons, for every log reader.
+"""Which readings of a laser log are no-return codes, not hits, when neither the log (``PARAM
+robot_front_laser_max``) nor the user (``--max-range``) names the maximum range: one rule, with its reasons.
 
-A CARMEN log writes "no return" as a reading at or beyond the laser's maximum range, and the exact value varies
-within and across logs (81.83-81.91 m in SICK logs, 50.00 m in ACES, 51.05 and 51.10 m in one log). A log's
-``PARAM robot_front_laser_max`` or the user's ``--max-range`` name the maximum; without them
-:func:`no_return_rule` reads it from the readings, and says why.
+A CARMEN log writes "no return" as a reading at or beyond the maximum range, whose exact value varies within and
+across logs (81.83-81.91 m in SICK logs, 50.00 m in ACES, 51.05 and 51.10 m in one log).
 """
 from __future__ import annotations
 
@@ -24,12 +23,8 @@ MIN_CODE_RANGE = 4.0  # [m] no scanning laser of these logs stops short of this 
 
 @dataclass(frozen=True)
 class MaxRangeGuess:
-    """What the readings of a log say about its laser's maximum range (:func:`no_return_rule`).
-
-    ``max_range`` [m]: readings at or beyond it are no-return codes (None: every reading is a hit);
-    ``reason``: why, in words; ``warning``: a one-line warning naming ``--max-range`` when the readings
-    look like codes the rule did not take (or None).
-    """
+    """``max_range`` [m]: readings at or beyond it are codes (None: all hits); ``reason`` in words; ``warning``: one
+    line naming ``--max-range`` when readings look like codes the rule did not take (or None)."""
 
     max_range: float | None
     reason: str
@@ -37,12 +32,8 @@ class MaxRangeGuess:
 
 
 def _code_cluster(finite):
-    """(lowest value, count) of the readings at the top of ``finite`` that lie together as codes do.
-
-    The top is the largest reading once up to :data:`CODE_STRAYS` stray readings above are set aside;
-    the cluster reaches down from it through readings no more than :data:`CODE_GAP` apart, at most
-    :data:`CODE_SPREAD` below the top (a real wall's readings spread further and without such gaps).
-    """
+    """(lowest value, count) of the readings at the top of ``finite`` (strays set aside) that lie together as codes
+    do: no gap over :data:`CODE_GAP`, within :data:`CODE_SPREAD` (a real wall's readings spread further)."""
     top_k = np.sort(np.partition(finite, max(finite.size - 1 - CODE_STRAYS, 0))[-(CODE_STRAYS + 1):])
     top = float(top_k[0])  # the (CODE_STRAYS + 1)-th largest reading
     near = np.unique(finite[(finite >= top - CODE_SPREAD) & (finite <= top)])[::-1]
@@ -55,19 +46,12 @@ def _code_cluster(finite):
 
 
 def no_return_rule(ranges) -> MaxRangeGuess:
-    """The maximum range [m] a log's readings imply (no ``PARAM robot_front_laser_max``, no ``--max-range``).
+    """The maximum range [m] a log's readings imply, with its reason.
 
-    The one rule every CARMEN reader uses, with its reason:
-
-    - readings beyond :data:`SICK_NO_RETURN` (80 m, a SICK LMS's limit) are codes whatever their value;
-    - else the readings at the top (up to :data:`CODE_STRAYS` strays set aside) that lie within a few cm of
-      each other (gaps up to :data:`CODE_GAP`, spread up to :data:`CODE_SPREAD`) are codes if they are many
-      (:data:`SPIKE_MIN_COUNT`), :data:`SPIKE_RATIO` times more than the readings in the :data:`SPIKE_BAND`
-      below them (where a real wall's readings would spread), and at least :data:`MIN_CODE_RANGE` away (no
-      scanning laser of these logs has a shorter maximum range); the maximum range is their lowest value,
-      so every code and stray above it is a no-return;
-    - such a pile below :data:`MIN_CODE_RANGE`, or one only as dense as what lies below it, is kept as hits
-      with a warning naming ``--max-range``; anything else is hits, silently.
+    Readings beyond :data:`SICK_NO_RETURN` are codes. Else the pile at the top (:func:`_code_cluster`) is codes if
+    it is many (:data:`SPIKE_MIN_COUNT`), :data:`SPIKE_RATIO` times denser than the :data:`SPIKE_BAND` below, and at
+    least :data:`MIN_CODE_RANGE` away; the maximum range is its lowest value (strays above it are no-returns too).
+    Such a pile below :data:`MIN_CODE_RANGE`, or only as dense as below it, is kept as hits with a warning.
 
     >>> r = np.r_[np.linspace(1, 49.9, 500), np.full(40, 50.0)]
     >>> no_return_rule(r).max_range, no_return_rule(np.linspace(1, 12, 500)).max_range

@@ -1,15 +1,7 @@
-"""Occupancy grids as exact ``.npy`` files: the float P(occupied) array, bit for bit.
+"""Occupancy grids as exact ``.npy`` files: the float P(occupied) array [y, x], bit for bit.
 
-A plain ``.npy`` cannot hold where the grid lies, so a small sidecar YAML beside it,
-``<name>.npy.yaml`` (:func:`npy_sidecar_path`), holds ``resolution``, ``origin`` and
-``frame_id``. Without a sidecar a grid loads with resolution 1 m, origin (0, 0, 0) in
-``map``. For ROS map_server maps see :mod:`crfmap.io.map_server`, whose :func:`~crfmap.io.map_server.load_grid`
-and :func:`~crfmap.io.map_server.save_grid` choose between the two by suffix.
-
->>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
-PosixPath('g.npy')
->>> load_npy("g.npy").resolution  # doctest: +SKIP
-0.05
+A plain ``.npy`` cannot hold where the grid lies, so a sidecar YAML beside it, ``<name>.npy.yaml``, holds
+``resolution``, ``origin`` and ``frame_id``.
 """
 from __future__ import annotations
 
@@ -26,24 +18,15 @@ from crfmap.grid import OccupancyGrid, check_probability_array
 
 
 def npy_sidecar_path(npy_path) -> Path:
-    """The metadata file of an ``.npy`` grid: ``map.npy`` -> ``map.npy.yaml``.
-
-    Not ``map.yaml``, which would clash with a map_server map of the same name.
-    """
+    """The sidecar of an ``.npy`` grid: ``map.npy`` -> ``map.npy.yaml`` (``map.yaml`` would clash with a map_server
+    map)."""
     npy_path = Path(npy_path)
     return npy_path.with_name(npy_path.name + ".yaml")
 
 
 def save_npy(grid: OccupancyGrid, path) -> Path:
-    """Save P(occupied) exactly as a 2-D float ``.npy`` [y, x] plus its sidecar YAML.
-
-    The sidecar (:func:`npy_sidecar_path`) holds ``resolution``, ``origin`` and ``frame_id``; both files are written
-    atomically and renamed as one unit (:func:`crfmap.io.atomic.atomic_paths`): a concurrent :func:`load_npy` sees
-    the old pair or the new one, never one of each.
-
-    >>> save_npy(OccupancyGrid(np.full((2, 3), 0.5), 0.05), "g.npy")  # doctest: +SKIP
-    PosixPath('g.npy')
-    """
+    """Save P(occupied) exactly, plus its sidecar; returns ``path``. Both are renamed as one unit: a concurrent
+    :func:`load_npy` sees the old pair or the new one, never one of each."""
     path = check_path_arg(path, "file name ending in .npy", file=True)
     if path.suffix.lower() != ".npy":
         raise InputError(path, "an .npy grid file must end in .npy")
@@ -80,13 +63,8 @@ def _read_sidecar(sidecar):
 
 
 def load_npy(path) -> OccupancyGrid:
-    """Load a P(occupied) ``.npy`` grid (2-D float in [0, 1]) and its sidecar if present.
-
-    Without a sidecar: resolution 1 m, origin (0, 0, 0), frame ``map``.
-
-    >>> load_npy("g.npy").shape  # doctest: +SKIP
-    (2, 3)
-    """
+    """Load a P(occupied) ``.npy`` grid (2-D float in [0, 1]) and its sidecar; without one: resolution 1 m, origin
+    (0, 0, 0), frame ``map``."""
     path = check_input_file(check_path_arg(path, file=True), ".npy grid file")
     sidecar = npy_sidecar_path(path)
     with unit_lock(path.parent, exclusive=False):  # the array and its sidecar of one save_npy

@@ -1,9 +1,5 @@
-"""One reader for every recording crfmap takes: a CARMEN log or a ROS 1 / ROS 2 bag, with its laser poses.
-
-``crfmap build``, ``convert`` and ``evaluate`` read their input here, and so do the study's notebooks and searches.
-The option names in its errors (``--max-range``, ``--scan-topic``, ``--laser-mount``, ``--pose-source``) are those
-of the commands, whose arguments it receives.
-"""
+"""One reader for every recording crfmap takes: a CARMEN log or a ROS 1 / ROS 2 bag. Its errors name the commands'
+options (``--max-range``, ...), whose arguments it receives."""
 from __future__ import annotations
 
 from crfmap.errors import InputError
@@ -20,10 +16,9 @@ def is_carmen_log(path) -> bool:
 def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None, uses_odometry=False):
     """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``.
 
-    For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom' the raw ODOM track interpolated
-    at the scan stamps ('tf' does not apply). ``max_range`` [m] (CARMEN only): readings at or beyond it are
-    no-returns (see :func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller writes the odometry out
-    (``convert``), so a log's corrupt ODOM records are warned of (as they are for ``pose_source='odom'``).
+    For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom' the ODOM track interpolated at
+    the scan stamps. ``max_range`` [m]: CARMEN only (:func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the
+    caller writes the odometry out, so a log's corrupt ODOM records are warned of.
     """
     path = check_path_arg(path, "log or bag")
     if not is_carmen_log(path):

@@ -1,13 +1,9 @@
 """ROS 1 bag files whose header record is laid out as rosbag writes it, so reindex and append keep them.
 
-A ROS 1 bag (format 2.0) starts with ``#ROSBAG V2.0\\n`` and the bag-header record: a 4-byte header length, the
-header (``op``, ``index_pos``, ``conn_count``, ``chunk_count``), a 4-byte data length and space padding. rosbag (C++
-``Bag::writeFileHeaderRecord``, Python ``Bag._write_file_header_record``) pads the *data* to ``4096 - header
-length``, so the record, with its two length fields, takes 4104 bytes. rosbags' Writer (0.11) pads the whole record
-to 4096 bytes instead; every reader accepts that, but rosbag's reindex and append rewrite the header in place with
-rosbag's 4104 bytes, overwriting the first 8 bytes of the first chunk (the bag then reads as empty, or "Unindexed
-bag"). :class:`Rosbag1Writer` works around it: it reserves rosbag's 4104 bytes when it opens the file and rewrites
-the record with rosbag's layout when it closes it.
+rosbag (C++ ``Bag::writeFileHeaderRecord``, Python ``Bag._write_file_header_record``) pads the bag-header record's
+*data* to ``4096 - header length``: 4104 bytes with the two length fields. rosbags' Writer pads the whole record to
+4096, so rosbag's reindex and append, rewriting it in place, overwrite the first chunk's first 8 bytes.
+:class:`Rosbag1Writer` reserves rosbag's 4104 bytes and rewrites the record in rosbag's layout on close.
 """
 from __future__ import annotations
 
@@ -48,13 +44,9 @@ MAX_CHUNK_EXPANSION = 1000  # a compressed chunk's stated size over its stored s
 
 
 def check_records(path, file_size=None):
-    """Walk a ROS 1 bag's top-level records (headers only); InputError naming ``path`` for one that lies.
-
-    Every record's header and data must lie within the file (bounded by its size, before anything is
-    allocated for them); a chunk's ``compression`` must be one rosbag writes and its ``size`` (the
-    uncompressed bytes) equal to its stored bytes when uncompressed, at most :data:`MAX_CHUNK_EXPANSION` times
-    them when compressed: a size of 0xFFFFFFFF on a 7 kB chunk was read as if true.
-    """
+    """Walk a ROS 1 bag's top-level records (headers only); InputError naming ``path`` for one that lies: a record
+    reaching past the end of the file, a chunk compression rosbag does not write, or a chunk's uncompressed ``size``
+    unequal to its stored bytes (uncompressed) or over :data:`MAX_CHUNK_EXPANSION` times them (compressed)."""
     with open(path, "rb") as f:
         size = file_size if file_size is not None else f.seek(0, 2)
         f.seek(len(BAG_MAGIC))

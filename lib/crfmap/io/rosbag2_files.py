@@ -1,9 +1,8 @@
 """ROS 2 bag files laid out as each distro's rosbag2 writes them (sqlite3 or MCAP, and metadata.yaml).
 
-rosbags serializes the messages; the files around them follow rosbag2's own source, branch by
-branch (ros2/rosbag2: ``rosbag2_storage_default_plugins/.../sqlite_storage.cpp`` on ``humble``,
-``rosbag2_storage_sqlite3/.../sqlite_storage.cpp`` and ``rosbag2_storage_mcap/src/mcap_storage.cpp``
-on ``jazzy``, ``rosbag2_storage/.../metadata_io.cpp`` / ``yaml.hpp``):
+rosbags serializes the messages; the files follow ros2/rosbag2's source: ``sqlite_storage.cpp``
+(``rosbag2_storage_default_plugins`` on humble, ``rosbag2_storage_sqlite3`` on jazzy), ``mcap_storage.cpp``,
+``rosbag2_storage/.../metadata_io.cpp``:
 
 ========================  =================================  ==========================================
                           humble                             jazzy
@@ -19,9 +18,8 @@ MCAP metadata record      ``rosbag2``: ``ROS_DISTRO``        ``rosbag2``: ``seri
 MCAP channel metadata     offered_qos_profiles               offered_qos_profiles, topic_type_hash
 ========================  =================================  ==========================================
 
-MCAP files are written with the ``mcap`` library (the reference implementation; rosbag2's C++
-plugin uses its C++ twin): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time =
-publish time, uncompressed chunks, summary and indexes.
+MCAP files (``mcap`` library): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time = publish time,
+uncompressed chunks, summary and indexes.
 """
 from __future__ import annotations
 
@@ -76,11 +74,9 @@ class Topic:
 
 
 def write_rosbag2(folder: Path, name, messages, topics, storage, distro):
-    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` (``name``: the bag's, as rosbag2
-    names the data file after the bag folder).
+    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` into the existing empty ``folder``.
 
-    ``messages``: (stamp [ns], topic name, serialized CDR bytes), in time order; ``topics``:
-    {name: :class:`Topic`} in the order they are offered. ``folder`` must exist and be empty.
+    ``messages``: (stamp [ns], topic name, CDR bytes) in time order; ``topics``: {name: :class:`Topic`}, in order.
     """
     data_name = f"{name}_0{STORAGE_SUFFIX[storage]}"
     for _, topic, _ in messages:

@@ -1,19 +1,10 @@
 """ROS 2 without a ROS install: the node's topics over Eclipse Cyclone DDS, on ROS 2's wire conventions.
 
-What a ROS 2 node (rmw_cyclonedds_cpp, or any RTPS RMW on the same domain) expects, and what
-this backend does, following rmw_cyclonedds_cpp's ``create_readwrite_qos`` and ``make_fqtopic``:
-
-- the DDS domain is ``ROS_DOMAIN_ID`` (default 0);
-- a ROS topic ``/map`` is the DDS topic ``rt/map``; its type is ``nav_msgs::msg::dds_::OccupancyGrid_``
-  (:mod:`crfmap.ros.dds_types`);
-- samples are XCDR1 (plain CDR), little-endian: the data representation QoS offers XCDR1 only,
-  as rmw_cyclonedds_cpp's type support does;
-- QoS (:mod:`crfmap.ros.qos`): reliable (blocking time infinite) or best effort; volatile or
-  transient local, with the durability service keeping the writer's own history (keep last
-  depth), as rmw_cyclonedds_cpp sets it; liveliness automatic; writers do not auto-dispose.
-
-The backend creates no ``ros_discovery_info`` entries, so ROS 2 tools list the topics (they are
-DDS endpoints) but not a node name.
+As rmw_cyclonedds_cpp (``create_readwrite_qos``, ``make_fqtopic``): domain ``ROS_DOMAIN_ID`` (default 0); ROS topic
+``/map`` is DDS topic ``rt/map`` of type ``nav_msgs::msg::dds_::OccupancyGrid_`` (:mod:`crfmap.ros.dds_types`);
+samples XCDR1, little-endian; QoS reliable (infinite blocking) or best effort, volatile or transient local with the
+durability service keeping the writer's history, liveliness automatic, no auto-dispose. No ``ros_discovery_info``:
+ROS 2 tools list the topics but not a node name.
 
 >>> ros_topic_name("/map"), ros_topic_name("scan")
 ('rt/map', 'rt/scan')
@@ -50,12 +41,10 @@ def domain_id(value=None) -> int:
 
 
 def dds_configuration(value=None) -> str | None:
-    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``) names, checked: None when unset or
-    empty (Cyclone's defaults).
+    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``), checked; None when unset or empty.
 
-    Cyclone reads a comma-separated list of files (``file://`` or plain paths) and inline XML (``<...>``) from it;
-    a file that is missing or unreadable, or text that is neither, would only fail (``DDSException``, no reason
-    given) when the participant is made. InputError naming ``CYCLONEDDS_URI`` instead, before any work.
+    A comma-separated list of files (``file://`` or paths) and inline XML (``<...>``): a file that is missing or
+    unreadable, or text that is neither, is an InputError now, not a ``DDSException`` without reason later.
 
     >>> dds_configuration("<CycloneDDS/>")
     '<CycloneDDS/>'

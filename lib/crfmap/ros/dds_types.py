@@ -1,11 +1,7 @@
-"""The ROS 2 messages the node uses, as Cyclone DDS IDL types with ROS 2's wire names.
+"""The ROS 2 messages the node uses, as Cyclone DDS IDL types with ROS 2's wire names (needs ``crfmap[ros]``).
 
-ROS 2 maps a message ``pkg/msg/Name`` to the DDS type ``pkg::msg::dds_::Name_`` (rosidl's IDL, as rmw_cyclonedds_cpp
-and every RTPS RMW register it), with the fields in the order of the ``.msg`` file and final extensibility, so a
-sample is plain CDR: XCDR1, little-endian, 8-byte alignment of float64 counted from the end of the 4-byte
-encapsulation header. The field lists below are ROS 2 Humble's (and Jazzy's: these messages did not change).
-
-Importing this module needs the ``cyclonedds`` package (``pip install crfmap[ros]``).
+ROS 2 maps ``pkg/msg/Name`` to the DDS type ``pkg::msg::dds_::Name_`` (rosidl's IDL), fields in ``.msg`` order,
+final extensibility: plain CDR (XCDR1). The field lists are Humble's (and Jazzy's: these messages did not change).
 """
 # no "from __future__ import annotations": cyclonedds reads the field types from the live annotations
 

@@ -1,15 +1,8 @@
-"""The messages the node exchanges, independent of the middleware, and their checks.
+"""The messages the node exchanges, as plain values independent of the middleware, and their checks.
 
-Every backend (Cyclone DDS, rclpy, rospy) turns what it receives into these plain values with
-:func:`grid_message`, :func:`scan_message` and :func:`transforms_of`, which read any ROS 1 or
-ROS 2 message object by attribute (ROS 2 stamps have ``sec``/``nanosec``, ROS 1 ones
-``secs``/``nsecs``), and builds its own message type from a :class:`GridMessage` it publishes.
-
-A message the node cannot use raises :class:`BadMessage` with a short ``kind`` (logged once
-per kind) and the reason: an OccupancyGrid that is empty (0 cells) or whose data length is not width * height, whose
-resolution is NaN or not positive, whose origin quaternion is not a rotation or whose values
-are outside -1 and 0..100; a LaserScan with a zero or non-finite angle increment or ranges
-that disagree with its angles; a transform with a non-unit quaternion.
+Backends read any ROS 1 or ROS 2 message object by attribute (:func:`grid_message`, :func:`scan_message`,
+:func:`transforms_of`) and build their own from a :class:`GridMessage`. A message the node cannot use raises
+:class:`BadMessage`.
 
 >>> g = GridMessage(stamp_ns=5, frame_id="map", map_load_ns=5, resolution=0.5, width=2, height=1,
 ...                 origin=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0), data=np.array([-1, 100], np.int8))
@@ -50,11 +43,8 @@ class BadMessage(ValueError):
 # --- plain values -----------------------------------------------------------------------------
 @dataclass
 class GridMessage:
-    """nav_msgs/OccupancyGrid (and its MapMetaData) as plain values.
-
-    ``origin`` is (x, y, z, qx, qy, qz, qw), kept as received so that an output copies its
-    input's info exactly; ``data`` is int8, row-major from cell (0, 0) (index x + y * width).
-    """
+    """nav_msgs/OccupancyGrid (and its MapMetaData) as plain values: ``origin`` (x, y, z, qx, qy, qz, qw) as received,
+    so an output copies its input's info exactly; ``data`` int8, row-major from cell (0, 0)."""
 
     stamp_ns: int
     frame_id: str
@@ -137,12 +127,9 @@ def scan_message(msg) -> ScanMessage:
 
 
 def transforms_of(msg):
-    """The transforms of a tf2_msgs/TFMessage (any middleware), and the faults found.
-
-    Returns ``(transforms, faults)``: a transform with a translation that is not finite or lies beyond
-    :data:`crfmap.grid.MAX_EXTENT_M`, or a quaternion that is not a rotation is left out and listed in ``faults`` as a
-    :class:`BadMessage`, so the good transforms of the same message still count.
-    """
+    """``(transforms, faults)`` of a tf2_msgs/TFMessage: a transform whose translation is not finite or beyond
+    :data:`crfmap.grid.MAX_EXTENT_M`, or whose quaternion is not a rotation, is a :class:`BadMessage` in ``faults``;
+    the good ones of the same message still count."""
     out, faults = [], []
     for tr in msg.transforms:
         parent, child = str(tr.header.frame_id).lstrip("/"), str(tr.child_frame_id).lstrip("/")
@@ -198,8 +185,7 @@ def occupancy_grid(msg: GridMessage):
 
 
 def grid_out(grid, stamp_ns_, frame_id, values="trinary") -> GridMessage:
-    """A :class:`GridMessage` of an :class:`~crfmap.grid.OccupancyGrid`: ``values`` "trinary" (100 / 0 / -1 as nav2's
-    map_server publishes the trinary file crfmap infer writes) or "percent" (P -> 0..100, exactly 0.5 -> -1)."""
+    """A :class:`GridMessage` of an OccupancyGrid, ``values`` as :func:`crfmap.io.nav2_values.occupancy_values`."""
     x, y, yaw = grid.origin
     qx, qy, qz, qw = yaw_to_quaternion(yaw)
     return GridMessage(stamp_ns=int(stamp_ns_), frame_id=frame_id, map_load_ns=int(stamp_ns_),

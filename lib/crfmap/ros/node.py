@@ -1,24 +1,10 @@
-"""The live node's core, shared by every middleware: refine maps as they come, or map from scans and tf.
+"""The live node's core, shared by every middleware: refine maps as they come (:class:`RefineNode`), or map from
+scans and tf (:class:`MapNode`).
 
-- :class:`RefineNode` subscribes to a nav_msgs/OccupancyGrid topic, refines the newest map with the default preset,
-  exactly as ``crfmap infer`` refines a map file (:func:`refine_grid`), and publishes the result with the input's
-  header and info, at most once per ``period`` seconds. Maps that arrive while one is being refined replace each
-  other: only the newest is refined, stale ones are dropped, not queued.
-- :class:`MapNode` subscribes to sensor_msgs/LaserScan and tf, places each scan at its own stamp once tf covers it
-  (:class:`crfmap.ros.tf_buffer.TfBuffer`), integrates it with :class:`crfmap.mapping.OnlineMapper` under a preset
-  (the default preset unless told otherwise, as ``crfmap infer``), and publishes the beliefs on ``/map`` and
-  ``/map_metadata`` at most once per ``period``; when it stops it runs LBP on the whole map to convergence and
-  publishes that final map (the preset's offline refinement of the integrated scans, :meth:`MapNode.finish`). Every
-  scan is accounted for: received, integrated, skipped (with the reason) or still waiting for tf, and the backend's
-  count of scans lost in transport (best-effort samples dropped, :meth:`DdsBackend.lost`) joins the summary; a
-  ``scan_log`` file gets one line per integrated scan (stamp [ns], laser pose x y yaw in the fixed frame), so what a
-  published map holds can be rebuilt exactly.
-
-A message the node cannot use is skipped and logged once per kind with the reason (:class:`BadMessages`); the node
-never publishes a map made from one. :func:`spin` runs a node over a backend (:mod:`crfmap.ros.dds`,
-:mod:`crfmap.ros.rclpy_backend`, :mod:`crfmap.ros.rospy_backend`), which only moves messages: ``subscribe(topic,
-kind, qos, callback)``, ``publisher(topic, kind, qos) -> send(GridMessage)``, ``spin_once(timeout)``, ``close()``;
-``kind`` is 'grid', 'metadata', 'scan' or 'tf'.
+A message the node cannot use is skipped and logged once per kind with the reason (:class:`BadMessages`); no map is
+published from one. :func:`spin` runs a node over a backend, which only moves messages: ``subscribe(topic, kind, qos,
+callback)``, ``publisher(topic, kind, qos) -> send(GridMessage)``, ``spin_once(timeout)``, ``close()``; ``kind`` is
+'grid', 'metadata', 'scan' or 'tf'.
 """
 from __future__ import annotations
 
@@ -91,7 +77,9 @@ def check_values(values: str) -> str:
 
 
 class RefineNode:
-    """Refine each new map of ``input_topic`` and publish it on ``output_topic`` (see the module docstring)."""
+    """Refine the newest map of ``input_topic`` (:func:`refine_grid`) and publish it on ``output_topic`` with the
+    input's header and info, at most once per ``period`` [s]. Maps arriving meanwhile replace each other (stale ones
+    are dropped, not queued)."""
 
     def __init__(self, input_topic="/map", output_topic="/map_refined", period=1.0, refine=refine_grid, log=log_line,
                  values="trinary"):
@@ -142,13 +130,13 @@ class RefineNode:
 
 
 class MapNode:
-    """Map online from ``scan_topic`` and tf; publish ``map_topic`` and ``metadata_topic`` (see the module docstring).
+    """Map online from ``scan_topic`` and tf; publish ``map_topic`` and ``metadata_topic`` at most once per ``period``.
 
-    ``bounds`` (xmin, ymin, xmax, ymax) [m] in the fixed frame and ``resolution`` [m] fix the grid
-    (the online mapper does not grow); ``fixed_frame`` None takes the root of the tf tree at the
-    first scan (map when a SLAM or localiser publishes map -> odom, else odom). ``mapper_options``
-    go to :meth:`crfmap.mapping.OnlineMapper.for_sensor` (preset, radius, max_iter, margin, ...; the
-    default preset unless ``preset`` names another).
+    Each scan is integrated at its own stamp once tf covers it (:class:`crfmap.ros.tf_buffer.TfBuffer`). ``bounds``
+    (xmin, ymin, xmax, ymax) [m] and ``resolution`` [m] fix the grid (it does not grow); ``fixed_frame`` None takes
+    the root of the tf tree at the first scan. ``mapper_options`` go to
+    :meth:`crfmap.mapping.OnlineMapper.for_sensor` (preset, radius, margin, ...). ``scan_log``: a file of one line per
+    integrated scan (stamp [ns], laser pose x y yaw in the fixed frame), so a published map can be rebuilt exactly.
     """
 
     def __init__(self, bounds, resolution=0.05, scan_topic="/scan", map_topic="/map", metadata_topic="/map_metadata",
@@ -264,10 +252,7 @@ class MapNode:
         return IDLE_SECONDS
 
     def finish(self):
-        """Converge the whole map (LBP until the preset's tol) and publish it: the node's final map.
-
-        Equal, to that tol, to the preset's offline refinement of the integrated scans; one log line.
-        """
+        """Converge the whole map (LBP until the preset's tol: its offline refinement of the scans) and publish it."""
         if self.mapper is None:
             return
         result = self.mapper.finish()
@@ -288,12 +273,10 @@ class MapNode:
 
 
 def spin(node, backend, stop, log=log_line):
-    """Run ``node`` over ``backend`` until ``stop`` (a threading.Event) is set; returns the node's summary.
+    """Run ``node`` over ``backend`` until ``stop`` (a threading.Event) is set; returns the node's summary, with the
+    samples a backend lost in transport (``lost() -> {topic: count}``).
 
-    A backend that can tell samples lost in transport (``lost() -> {topic: count}``) adds them to it.
-
-    Callbacks only queue what arrives (some backends call them from their own threads); the
-    node handles messages and works in this thread, so its state needs no lock.
+    Callbacks only queue (some backends call them from their own threads): the node's state needs no lock.
     """
     inbox = queue.SimpleQueue()
     for sub in node.subscriptions:

@@ -1,15 +1,10 @@
-"""The QoS of each topic the node uses, as ROS users expect them (independent of the middleware).
+"""The QoS of each topic the node uses, as ROS users expect them (in ROS 1: maps latched, the rest plain).
 
-- Maps (``/map``, ``/map_refined``, ``/map_metadata``): reliable, transient local, keep last 1,
-  as map_server and slam_toolbox publish them, so a subscriber that starts late still gets
-  the last map. A nav2 costmap subscribes to ``/map`` that way (``map_subscribe_transient_local``).
-- Scans: sensor-data QoS (rclcpp's ``SensorDataQoS``: best effort, volatile, keep last 5). The
-  node's reader keeps more (``reader_depth``): a reader's depth is its own and matches any
-  writer, and a mapper busy with one scan then loses none of the next.
-- ``/tf``: reliable, volatile, keep last 100 (tf2_ros's listener and broadcaster).
-- ``/tf_static``: reliable, transient local (tf2_ros's static broadcaster keeps 1, the listener 100).
-
-In ROS 1 these become: maps latched, everything else plain (TCPROS is always reliable).
+- Maps: reliable, transient local, keep last 1, as map_server and slam_toolbox publish them (a late subscriber,
+  such as nav2's costmap with ``map_subscribe_transient_local``, still gets the last map).
+- Scans: rclcpp's ``SensorDataQoS``; the node's reader keeps more (``reader_depth``, its own whatever the writer's),
+  so a mapper busy with one scan loses none of the next.
+- ``/tf``, ``/tf_static``: tf2_ros's listener and broadcasters.
 """
 from __future__ import annotations
 

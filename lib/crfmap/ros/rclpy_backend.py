@@ -1,9 +1,5 @@
-"""ROS 2 with a ROS install: the node's topics through rclpy (any RMW the install uses).
-
-The QoS profiles of :mod:`crfmap.ros.qos` become rclpy ``QoSProfile`` objects; callbacks run in
-``rclpy.spin_once`` on the node's own thread. rclpy's signal handlers stay off: the command
-handles SIGINT and SIGTERM, so a refinement in progress finishes before the node stops.
-"""
+"""ROS 2 with a ROS install: the node's topics through rclpy (any RMW the install uses). rclpy's signal handlers
+stay off: the command handles SIGINT and SIGTERM, so a refinement in progress finishes before the node stops."""
 from __future__ import annotations
 
 from crfmap.errors import InputError

@@ -1,9 +1,7 @@
 """ROS 1: the node's topics through a running roscore with rospy (Debian: ``apt-get install python3-rospy``).
 
-Maps are published latched (ROS 1's transient local, as map_server does); scans and tf are plain subscriptions
-(TCPROS is reliable). Debian's ROS 1 packages live in the system Python's ``dist-packages``; when ``rospy`` is not
-importable otherwise and that folder holds it, it is added at the end of ``sys.path`` (after this environment's own
-packages), so crfmap's virtual environment can use Debian's ROS 1 without a ROS workspace.
+Debian's ROS 1 lives in the system Python's ``dist-packages``; when ``rospy`` is not importable otherwise, that
+folder goes at the end of ``sys.path``, so crfmap's virtual environment uses it without a ROS workspace.
 """
 from __future__ import annotations
 

@@ -1,11 +1,6 @@
-"""Transforms as they arrive, and the laser's pose at a scan's stamp once tf covers it (tf2's rules, planar).
-
-A live mapper cannot place a scan until every moving transform between the laser and the fixed frame has a sample at
-or after the scan's stamp (tf2's ``canTransform``); a scan older than the first sample of one of them never will be
-placed. :meth:`TfBuffer.lookup` says which, and gives the pose exactly as :func:`crfmap.io.bag_reader.read_bag`
-computes it from the same transforms (the static chain from the laser up, then each moving transform interpolated at
-the stamp, :class:`crfmap.frames.TfTree`), so a bag played into the node maps the same as the bag read from its
-file.
+"""Transforms as they arrive, and the laser's pose at a scan's stamp once tf covers it (tf2's ``canTransform``,
+planar), computed exactly as :func:`crfmap.io.bag_reader.read_bag` does: a bag played into the node maps the same as
+the bag read from its file.
 
 >>> buffer = TfBuffer()
 >>> buffer.add(Transform(0, "base_link", "laser", (0.1, 0.0, 0.0)), static=True)
@@ -48,12 +43,10 @@ class TfBuffer:
                 del track[: len(track) // 2]
 
     def lookup(self, frame, stamp, fixed_frame=None):
-        """(status, pose of ``frame`` in the fixed frame at ``stamp`` [s], fixed frame).
+        """(status, pose of ``frame`` in the fixed frame at ``stamp`` [s], fixed frame: ``fixed_frame`` or the root).
 
-        ``status`` is 'ready' (pose given), 'wait' (a moving transform has no sample at or
-        after ``stamp`` yet, or none reaches the frame) or 'never' (``stamp`` is before a
-        moving transform's first sample). The fixed frame is ``fixed_frame`` if given (the walk
-        up the tree stops there; 'wait' until the tree reaches it), else the root of the tree.
+        ``status``: 'ready'; 'wait' (a moving transform has no sample at or after ``stamp`` yet, or the tree does not
+        reach the fixed frame yet); 'never' (``stamp`` is before a moving transform's first sample).
         """
         tree = self.tree
         frame = frame.lstrip("/")
