@@ -23,6 +23,7 @@ from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.recording import ScanSet
 from crfmap.assess.likelihood_field import Beams, LaserModel, LikelihoodField, _check_origin
+from crfmap.assess.scansplit import percentile_interval
 
 OFFSET_TRANSLATION = (0.05, 0.30)  # [m] the discrimination offsets' distance from the true pose
 OFFSET_ROTATION_DEG = (2.0, 10.0)  # [deg] and their turn
@@ -230,7 +231,6 @@ def compare_localisation(maps: dict, resolution, origin, scans: ScanSet, referen
     results = {name: localise(p, resolution, origin, scans, seed=seed, **options) for name, p in maps.items()}
     n = len(results[reference].scan_index)
     resamples = np.random.default_rng([check_int("seed", seed, low=0), 2]).integers(0, n, (n_boot, n))
-    alpha = (1 - level) / 2
     boot = {name: {m: _statistic(m, v[resamples], axis=1) for m, v in r.per_scan.items()} if n_boot else {}
             for name, r in results.items()}
     out = {}
@@ -242,8 +242,8 @@ def compare_localisation(maps: dict, resolution, origin, scans: ScanSet, referen
             entry[m] = value
             entry[m + "_diff"] = value - results[reference].summary()[m]
             if n_boot:
-                entry[m + "_ci"] = _interval(boot[name][m], alpha)
-                entry[m + "_diff_ci"] = _interval(boot[name][m] - boot[reference][m], alpha)
+                entry[m + "_ci"] = percentile_interval(boot[name][m], level)
+                entry[m + "_diff_ci"] = percentile_interval(boot[name][m] - boot[reference][m], level)
         entry.update(scans=n, seconds=r.seconds)
         out[name] = entry
     return out
@@ -254,10 +254,6 @@ def _statistic(metric, values, axis=None):
     reduce = np.median if metric in ("translation_error", "rotation_error") else np.mean
     result = reduce(values, axis=axis)
     return float(result) if axis is None else result
-
-
-def _interval(values, alpha):
-    return (float(np.quantile(values, alpha)), float(np.quantile(values, 1 - alpha)))
 
 
 def _spread(indices, count):

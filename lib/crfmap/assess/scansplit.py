@@ -38,7 +38,7 @@ import numpy as np
 from crfmap.assess.block_bootstrap import _auc_resampled, _block_counts, _block_ids, _draws
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.mapping.builder import count_hits, scan_bounds
+from crfmap.mapping.builder import arctan_probability, count_hits, scan_bounds
 
 GROUPS = ("all", "seen", "unseen")
 METRICS = ("brier", "logloss", "auc", "wall_recall")
@@ -112,8 +112,7 @@ class ScanSplit:
 
     def raw_probability(self) -> np.ndarray:
         """The first half's grid with the thesis's arctan model (as :func:`crfmap.mapping.build_grid`)."""
-        x = self.first_hits.astype(np.float64) - self.first_passes
-        return 0.5 + np.arctan(x) / math.pi
+        return arctan_probability(self.first_hits, self.first_passes)
 
     def raw_grid(self) -> OccupancyGrid:
         """:meth:`raw_probability` as an OccupancyGrid with the split's resolution and origin."""

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import inspect
 import math
+from functools import partial
 
 import numpy as np
 
@@ -296,21 +297,16 @@ def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=T
 
 
 # --- names ---------------------------------------------------------------------------
-SCENES = {
-    "x": lambda **kw: x_image(**kw),
-    "occluded-train": lambda **kw: occluded_walls("train", **kw),
-    "occluded-test": lambda **kw: occluded_walls("test", **kw),
-    "enclosed-train": lambda **kw: enclosed_boxes("train", **kw),
-    "enclosed-test": lambda **kw: enclosed_boxes("test", **kw),
-    "hollow-train": lambda **kw: enclosed_boxes("train", hollow=True, **kw),
-    "hollow-test": lambda **kw: enclosed_boxes("test", hollow=True, **kw),
-    "office": lambda **kw: office_floor(**kw),
+SCENES = {  # name -> the scene's maker, its variant given
+    "x": partial(x_image),
+    "occluded-train": partial(occluded_walls, "train"),
+    "occluded-test": partial(occluded_walls, "test"),
+    "enclosed-train": partial(enclosed_boxes, "train"),
+    "enclosed-test": partial(enclosed_boxes, "test"),
+    "hollow-train": partial(enclosed_boxes, "train", hollow=True),
+    "hollow-test": partial(enclosed_boxes, "test", hollow=True),
+    "office": partial(office_floor),
 }
-
-
-_SCENE_MAKERS = {"x": x_image, "office": office_floor,
-                 **{k: occluded_walls for k in ("occluded-train", "occluded-test")},
-                 **{k: enclosed_boxes for k in ("enclosed-train", "enclosed-test", "hollow-train", "hollow-test")}}
 
 
 def make_scene(name, **kwargs) -> Scene:
@@ -321,8 +317,7 @@ def make_scene(name, **kwargs) -> Scene:
     """
     if name not in SCENES:
         raise InputError("scene", f"unknown scene {name!r}; choose one of {', '.join(SCENES)}")
-    maker = _SCENE_MAKERS[name]
-    accepted = set(inspect.signature(maker).parameters) - {"variant", "hollow"}
+    accepted = set(inspect.signature(SCENES[name].func).parameters) - {"variant", "hollow"}
     for key in kwargs:
         if key not in accepted:
             raise InputError(key, f"scene {name!r} takes no {key!r}; it takes {', '.join(sorted(accepted))}")
