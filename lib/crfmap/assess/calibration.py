@@ -5,9 +5,8 @@ their predicted P into ``bins`` equal-width bins on [0, 1]; in each bin the mean
 the share of cells the second half calls occupied. A calibrated map has the two equal in every bin.
 The expected calibration error is the cell-weighted mean gap, ``sum_b n_b / n |mean P_b - share_b|``.
 
-:func:`fit_temperature` fits one temperature T (``P' = sigmoid(logit(P) / T)``; T > 1 softens an
-over-confident map, T < 1 sharpens an under-confident one) by the log-loss on a recording's second
-half: fit it on the training recording only, then apply it unchanged elsewhere.
+:func:`fit_temperature` fits a preset's temperature T by the log-loss on a recording's second half: fit it on the
+training recording only, then apply it unchanged elsewhere.
 
 >>> p = np.array([0.1, 0.1, 0.9, 0.9]); y = np.array([0, 1, 1, 1])
 >>> round(expected_calibration_error(p, y, bins=10), 3)
@@ -59,9 +58,7 @@ def expected_calibration_error(p, labels, bins: int = DEFAULT_BINS) -> float:
 
 
 def apply_temperature(p, temperature: float) -> np.ndarray:
-    """``sigmoid(logit(P) / T)`` (:func:`crfmap.crf.presets.temper`, what a preset's ``temperature`` does).
-
-    P = 0.5 stays 0.5, and T = 1 changes nothing but clipping at 0 and 1.
+    """``sigmoid(logit(P) / T)``: :func:`crfmap.crf.presets.temper`, what a preset's ``temperature`` does.
 
     >>> apply_temperature(np.array([0.5, 0.9]), 2.0).round(3).tolist()
     [0.5, 0.75]

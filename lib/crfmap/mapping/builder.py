@@ -242,10 +242,8 @@ class HitCounter:
         return cls.for_scans(probe, resolution, bounds, free_on_no_return, max_range_is_no_return)
 
     def add_scan(self, ranges, laser_pose) -> np.ndarray:
-        """Count one scan's hits (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map).
-
-        Returns the cells whose counts changed, once each, as an (n, 2) array of (x, y).
-        """
+        """Count one scan's hits (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map); returns the
+        cells whose counts changed, once each, as (n, 2) (x, y)."""
         r = np.asarray(ranges)
         if r.shape != (len(self.angles),) or not np.issubdtype(r.dtype, np.floating):
             raise InputError("ranges", f"expected {len(self.angles)} floating-point readings, got shape {r.shape} "

@@ -154,11 +154,8 @@ def _logodds_params(p_hit, p_miss, clamp_min, clamp_max) -> tuple:
 
 def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, clamp_min=CLAMP_MIN,
                  clamp_max=CLAMP_MAX, free_on_no_return=False, max_range_is_no_return=True) -> OccupancyGrid:
-    """Occupancy grid of OctoMap's clamped log-odds update, one update per cell and scan.
-
-    Same grid as :func:`crfmap.mapping.build_grid` for the same ``scans``, ``resolution`` and
-    ``bounds``; ``probability`` is ``sigmoid(l)`` where a cell was updated, 0.5 elsewhere.
-    """
+    """Occupancy grid of OctoMap's clamped log-odds update on :func:`crfmap.mapping.build_grid`'s grid: ``sigmoid(l)``
+    where a cell was updated, 0.5 elsewhere."""
     params = _logodds_params(p_hit, p_miss, clamp_min, clamp_max)
     g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
     shape = (g["height"], g["width"])

@@ -185,10 +185,8 @@ class OnlineMapper:
         return seconds
 
     def finish(self, tol=None, max_iter=None, threads=None) -> LBPResult:
-        """LBP on the whole grid from the current messages until ``tol``: the preset's offline refinement.
-
-        ``tol`` and ``max_iter`` default to the preset's own (what :meth:`Preset.refine` runs to).
-        """
+        """LBP on the whole grid from the current messages until ``tol`` (by default the preset's, as
+        :meth:`Preset.refine`): the preset's offline refinement."""
         import numba
 
         tol = self.preset.tol if tol is None else float(tol)

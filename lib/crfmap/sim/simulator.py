@@ -47,10 +47,8 @@ PROGRESS_BEAMS = 2_000_000  # beams in a run above which simulate() shows a prog
 # --- ray casting --------------------------------------------------------------------------
 @njit(cache=True)
 def _cast_scans(occupied, lx, ly, lyaw, angles, reach, out):
-    """Distances [cells] from laser positions (lx, ly) [cells, continuous] to the first occupied cell's centre.
-
-    ``out[i, j]`` = inf where beam j of scan i meets nothing before ``reach`` cells.
-    """
+    """Distances [cells] from laser positions (lx, ly) [cells, continuous] to the first occupied cell's centre
+    (``out[i, j]`` = inf where beam j of scan i meets nothing before ``reach`` cells)."""
     for i in range(lx.shape[0]):
         cx = int(math.floor(lx[i]))
         cy = int(math.floor(ly[i]))
@@ -106,8 +104,7 @@ def cast_rays(truth: OccupancyGrid, laser: Laser, laser_poses, progress=False) -
 def add_range_noise(ranges, bound=0.0, sigma=0.0, rng=None) -> np.ndarray:
     """The thesis's ``d +- C`` on every finite range: ``d + s * c``, ``s`` = +-1, ``c`` ~ U[0, bound], plus N(0, sigma).
 
-    Random numbers are drawn for every beam (returns or not) so the stream does not depend on the scene. Results are
-    floored at 0.
+    Random numbers are drawn for every beam (returns or not) so the stream does not depend on the scene.
 
     >>> r = add_range_noise(np.array([[1.0, np.inf]]), 0.1, rng=np.random.default_rng(0))
     >>> bool(abs(r[0, 0] - 1.0) <= 0.1), float(r[0, 1])
@@ -143,7 +140,6 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
              angular_speed=1.5, t0=START_TIME, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
-    - ``laser``: default ``Laser()``: 360 beams over 360 deg, 0.05-5 m.
     - ``drive``: a drive of :mod:`crfmap.sim.drives` or a mode name (default: ``scene.default_mode``). Settings of a
       drive (``stride``, ``turns``, ``waypoints``, ``scan_period``, ``robot_radius``) given here are an InputError.
     - ``seed``: all noise comes from ``np.random.default_rng(seed)``. ``range_noise`` C [m] and ``range_sigma`` [m]:
