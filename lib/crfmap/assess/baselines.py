@@ -1,12 +1,7 @@
 """What a CRF refinement must beat: simple ways to clean a grid, all as [y, x] P(occupied) arrays.
 
-- :func:`window_mean` / :func:`window_median`: the mean / median P of the observed cells in the
-  3x3 window around each cell (0.5 where none is observed);
-- :func:`grey_closing`: morphological closing of P (3x3 maximum, then 3x3 minimum), which
-  closes gaps in walls one or two cells wide;
-- :func:`graph_cut`: the exact MAP labelling (P = 0 or 1) of a CRF by a PyMaxflow graph cut;
-- :func:`all_baselines`: these plus the raw grid, the log-odds grid and the thesis's tables,
-  for a :class:`crfmap.assess.scansplit.ScanSplit`.
+Window filters over the observed cells, a grey closing (which closes wall gaps one or two cells wide), the exact MAP
+labelling by a graph cut, and :func:`all_baselines`: these with the raw, log-odds and thesis rows of a scan split.
 
 >>> p = np.array([[0.9, 0.5, 0.9], [0.1, 0.1, 0.1]])
 >>> window_mean(p).round(3).tolist()
@@ -68,10 +63,8 @@ def grey_closing(grid) -> np.ndarray:
 
 
 def graph_cut(observation, hidden, region=None) -> np.ndarray:
-    """MAP labelling (1.0 occupied, 0.0 free) of the CRF with unary ``observation`` and ``hidden``.
-
-    Exact by a PyMaxflow graph cut (symmetric attractive ``hidden`` only). Outside ``region``
-    (boolean mask) the result is the observation itself.
+    """Exact MAP labelling (1.0 occupied, 0.0 free) of the CRF with unary ``observation`` and a symmetric attractive
+    ``hidden`` (:func:`crfmap.assess.mincut.graph_cut_map`). Outside ``region`` (boolean mask): the observation.
 
     >>> graph_cut(np.array([[0.9, 0.45, 0.9]]), [[10, 1], [1, 10]]).tolist()
     [[1.0, 1.0, 1.0]]
@@ -104,8 +97,7 @@ def _graphcut(split, raw, thesis_max_iter):
 
 
 # The registry of baseline rows: name -> function(split, raw grid, thesis_max_iter) -> [y, x] P (None: not available
-# for this split). crfmap evaluate, compare() and the notebooks read their rows from here (crfmap.assess.comparison):
-# a new baseline is one function and one entry.
+# for this split); a new baseline is one function and one entry.
 BASELINE_ROWS = {
     "raw": lambda split, raw, _: raw,
     "logodds": _logodds,
@@ -119,11 +111,9 @@ BASELINES = tuple(BASELINE_ROWS)
 
 
 def all_baselines(split, thesis_max_iter: int = 1000, names=BASELINES) -> dict:
-    """{name: P} of the baselines ``names`` (:data:`BASELINE_ROWS`) for a scan split's first half.
+    """{name: P} of the baselines ``names`` (:data:`BASELINE_ROWS`) for a scan split's first half; ``raw`` always.
 
-    ``raw`` (arctan grid), ``logodds`` (the Probabilistic Robotics update; needs ``split.first_scans``), ``mean3x3``,
-    ``median3x3``, ``closing3x3``, ``thesis`` (LBP with the thesis's tables on the raw grid) and
-    ``graphcut`` (the MAP labelling of the thesis's CRF). ``raw`` is always included.
+    ``logodds`` needs ``split.first_scans`` and is left out without them.
     """
     unknown = [n for n in names if n not in BASELINE_ROWS]
     if unknown:

@@ -14,9 +14,8 @@ from numba import njit
 def _auc_resampled(y, inverse, starts, draws):  # pragma: no cover - compiled; tested against _Scorer._auc
     """:meth:`crfmap.assess.scansplit._Scorer._auc` for every row of block weights ``draws``, cells sorted by P.
 
-    Every resample at once: each cell's weights are one row of the transposed ``draws``, and each
-    resample's sums are added in the same order as one resample at a time (the same numbers, bit for
-    bit), but the resamples are independent, so the loop over them is not one long chain of additions.
+    Each resample's sums are added in the order of one resample at a time (the same numbers, bit for bit), but the
+    innermost loop runs over independent resamples, not along one long chain of additions.
     """
     n_boot, n, n_runs = draws.shape[0], y.size, starts.size
     weights = np.ascontiguousarray(draws.T)  # [block, resample]

@@ -5,9 +5,8 @@ their predicted P into ``bins`` equal-width bins on [0, 1]; in each bin the mean
 the share of cells the second half calls occupied. A calibrated map has the two equal in every bin.
 The expected calibration error is the cell-weighted mean gap, ``sum_b n_b / n |mean P_b - share_b|``.
 
-:func:`fit_temperature` fits one temperature T (``P' = sigmoid(logit(P) / T)``; T > 1 softens an
-over-confident map, T < 1 sharpens an under-confident one) by the log-loss on a recording's second
-half: fit it on the training recording only, then apply it unchanged elsewhere.
+:func:`fit_temperature` fits a preset's temperature T by the log-loss on a recording's second half: fit it on the
+training recording only, then apply it unchanged elsewhere.
 
 >>> p = np.array([0.1, 0.1, 0.9, 0.9]); y = np.array([0, 1, 1, 1])
 >>> round(expected_calibration_error(p, y, bins=10), 3)
@@ -21,7 +20,6 @@ import math
 
 import numpy as np
 
-from crfmap.assess.scansplit import DEFAULT_BLOCK, block_resamples, percentile_interval
 from crfmap.crf.presets import LOGIT_FLOOR, temper
 from crfmap.errors import InputError
 
@@ -60,9 +58,7 @@ def expected_calibration_error(p, labels, bins: int = DEFAULT_BINS) -> float:
 
 
 def apply_temperature(p, temperature: float) -> np.ndarray:
-    """``sigmoid(logit(P) / T)`` (:func:`crfmap.crf.presets.temper`, what a preset's ``temperature`` does).
-
-    P = 0.5 stays 0.5, and T = 1 changes nothing but clipping at 0 and 1.
+    """``sigmoid(logit(P) / T)``: :func:`crfmap.crf.presets.temper`, what a preset's ``temperature`` does.
 
     >>> apply_temperature(np.array([0.5, 0.9]), 2.0).round(3).tolist()
     [0.5, 0.75]
@@ -107,45 +103,3 @@ def split_calibration(split, predictions: dict, group: str = "all", bins: int = 
                                                                                                    bins))
     return out
 
-
-def paired_calibration(split, predictions: dict, reference: str, n_boot: int = 200, block: int = DEFAULT_BLOCK,
-                       seed: int = 0, group: str = "all", bins: int = DEFAULT_BINS, level: float = 0.95) -> dict:
-    """Each prediction's ECE with a spatial-block bootstrap interval, and its paired difference to ``reference``.
-
-    ``{name: {"ece", "ece_ci", "ece_diff", "ece_diff_ci"}}`` (the difference: name minus reference; the reference's
-    own is 0). The resamples are :func:`crfmap.assess.scansplit.block_resamples`' (the same ``n_boot``, ``block``
-    and ``seed`` give the draws of :func:`crfmap.assess.scansplit.score`), so the ECE moves with the Brier score's
-    blocks. A resample's ECE is the ECE of its weighted cells: per bin and block the cell count, sum of P and count
-    occupied, weighted by how often each block was drawn. ``n_boot = 0``: the point estimates, intervals None.
-
-    >>> from crfmap.assess.scansplit import ScanSplit
-    >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))
-    >>> p = {"raw": sp.raw_probability(), "half": np.full(sp.shape, 0.5)}
-    >>> c = paired_calibration(sp, p, "raw", n_boot=50, block=4)
-    >>> abs(c["raw"]["ece"] - split_calibration(sp, p)["raw"]["ece"]) < 1e-12, c["raw"]["ece_diff_ci"]
-    (True, (0.0, 0.0))
-    """
-    if reference not in predictions:
-        raise InputError("reference", f"{reference!r} is not one of the predictions ({', '.join(predictions)})")
-    r = block_resamples(split, n_boot=n_boot, block=block, seed=seed)[group]
-    if r.n_blocks == 0:
-        raise InputError(group, "no cell of this group was observed by the split's second half")
-    weights = np.ones((1, r.n_blocks)) if r.draws is None else np.vstack([np.ones(r.n_blocks), r.draws])
-    eces = {}
-    for name, pred in predictions.items():
-        values = np.asarray(getattr(pred, "probability", pred), dtype=np.float64)
-        if values.shape != split.shape:
-            raise InputError(name, f"prediction shape {values.shape} does not match the split's grid {split.shape}")
-        p, y = _check(values[r.mask], r.labels, bins)
-        which = np.minimum((p * bins).astype(np.int64), bins - 1) * r.n_blocks + r.inverse  # (bin, block) index
-        size = bins * r.n_blocks
-        sums = [np.bincount(which, weights=w, minlength=size).reshape(bins, r.n_blocks).T for w in (None, p, y)]
-        count, sum_p, sum_y = (weights @ s for s in sums)  # [resample, bin]
-        eces[name] = np.abs(sum_p - sum_y).sum(axis=1) / count.sum(axis=1)  # row 0: every block once
-    out = {}
-    for name, e in eces.items():
-        diff = e - eces[reference]
-        boot = r.draws is not None and n_boot > 0
-        out[name] = {"ece": float(e[0]), "ece_ci": percentile_interval(e[1:], level) if boot else None,
-                     "ece_diff": float(diff[0]), "ece_diff_ci": percentile_interval(diff[1:], level) if boot else None}
-    return out

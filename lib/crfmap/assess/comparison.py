@@ -1,9 +1,7 @@
 """Every evaluated method on one scan split: the rows ``crfmap evaluate`` prints and the notebooks tabulate.
 
-The rows are read from the registries of the methods, never typed again: the baselines
-(:data:`crfmap.assess.baselines.BASELINES`), any preset (:data:`crfmap.crf.presets.PRESETS`) and the published peers
-(:data:`crfmap.assess.peers.PEERS`). A new baseline or peer is one entry in its registry (and its tests); the CLI's
-``--methods`` choices, the paired comparisons and the navigation tables follow from :func:`method_names`.
+The rows come from the registries: the baselines (:data:`crfmap.assess.baselines.BASELINES`), any preset
+(:data:`crfmap.crf.presets.PRESETS`) and the published peers (:data:`crfmap.assess.peers.PEERS`).
 """
 from __future__ import annotations
 
@@ -47,21 +45,15 @@ def parse_methods(text: str, preset: str = DEFAULT_PRESET) -> list:
 def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, block: int = DEFAULT_BLOCK,
             seed: int = 0, extra: dict | None = None, keep_beliefs: bool = False, methods=None, nav: bool = True,
             progress: bool = False) -> dict:
-    """Score the baselines (:func:`crfmap.assess.baselines.all_baselines`), ``preset`` and peers on a split.
+    """Score the rows ``methods`` (names of :func:`method_names`; None: every baseline and ``preset``) on a split.
 
-    ``methods``: the rows to score, by name (baselines, ``preset``, the published peers of
-    :data:`crfmap.assess.peers.PEERS`); None means every baseline and the preset (no peers).
-    ``"raw"`` is always scored, as the paired reference. Returns the :func:`crfmap.assess.scansplit.score` dictionary;
-    the preset's LBP result summary is under ``"_lbp"``, each peer's wall time [s] under
-    ``"_seconds"``, every other row's paired Brier and log-loss differences to the preset under
-    ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``); ``keep_beliefs``: every
-    scored ``{name: P}`` under ``"_beliefs"`` too (arrays: for a caller scoring them again). ``extra`` adds more
-    ``{name: P}`` rows (and ``"_maps"``: each row's map for nav2, a gated preset's ``nav2_map``). Brier, log-loss and
-    the other probability scores read each row's beliefs; ``nav`` (default): every row's map for nav2 (a gated preset's
-    decision, :attr:`~crfmap.crf.inference.result.LBPResult.nav2_map`) read the way nav2 reads the written trinary map, scored with
-    :func:`crfmap.assess.navigation.nav_scores` against the raw grid on the same resamples, under ``"_nav"``
-    (``{name: {group: {metric, metric_ci, metric_diff, metric_diff_ci}, "map": {...}}}``). ``progress``: a tqdm
-    bar of the steps (baselines, the preset, each peer, the scores, the nav2 reading).
+    ``"raw"`` is always scored, as the paired reference. Returns the :func:`crfmap.assess.scansplit.score` dictionary
+    of each row's beliefs, plus ``"_lbp"`` (the preset's LBP summary), ``"_seconds"`` (each peer's wall time [s]) and
+    ``"_vs_preset"`` (``{name: {group: {"brier_diff": ..., "brier_diff_ci": ...}}}``, every other row against the
+    preset). ``extra``: more ``{name: P}`` rows. ``nav``: also every row's map for nav2 (a gated preset's
+    :attr:`~crfmap.crf.inference.result.LBPResult.nav2_map`) scored by :func:`crfmap.assess.navigation.nav_scores`
+    on the same resamples, under ``"_nav"``. ``keep_beliefs``: the scored ``{name: P}`` under ``"_beliefs"`` and the
+    maps for nav2 under ``"_maps"``. ``progress``: a tqdm bar of the steps.
     """
     wanted = list(BASELINES) + [preset] if methods is None else list(methods)
     unknown = [m for m in wanted if m not in method_names(preset)]

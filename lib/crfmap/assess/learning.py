@@ -1,24 +1,18 @@
 """Learning the CRF's two tables from a grid with known ground truth (thesis sec. 2.7, 3.5).
 
-Two learners, each returning the learned tables and its trace:
+Three learners, each returning the learned tables and its trace:
 
-- :func:`learn_thesis`: the thesis's method exactly. From the default tables, step each of the 8
-  entries (4 hidden, 4 link) by +alpha, else -alpha (alpha = 0.01), rerun LBP, keep a step that
-  lowers the MSE against the truth; when a full round over the 8 entries improves nothing, halve
-  alpha; stop when alpha falls below ``min_alpha`` or after ``max_rounds``.
-- :func:`learn_gradient` (our default): minimise the same objective as the thesis, LBP's MSE
-  against the truth, but by gradient descent on the log of the 8 entries (entries stay positive;
-  a step is relative to the entry's size, which the thesis's fixed alpha = 0.01 is not: 0.1 % of a
-  hidden entry of 10 but 100 % of a link entry of 0.01). The gradient is taken by central
-  differences through converged LBP (16 LBP runs a step), with a backtracking step size.
+- :func:`learn_thesis`: the thesis's method exactly, a coordinate search on the 8 entries (4 hidden, 4 link)
+  minimising LBP's MSE against the truth.
+- :func:`learn_gradient` (our default): the same objective by gradient descent on the log of the 8 entries
+  (entries stay positive, and a step is relative to the entry's size, which the thesis's fixed alpha = 0.01 is not:
+  0.1 % of a hidden entry of 10 but 100 % of a link entry of 0.01); central differences through converged LBP.
 - :func:`learn_pseudolikelihood`: maximise the pseudo-likelihood of the ground truth (Besag), the learner of the
   Matlab toolbox the thesis compared against. Each cell's conditional given its true neighbours and its observation
-  is exact and cheap, so no inference runs during learning; the objective is smooth, and gradient ascent on the
-  log-entries (so entries stay positive) uses the exact gradient.
+  is exact and cheap, so no inference runs during learning, and the gradient is exact.
 
-Scale: a table matters only up to scale for LBP, so learned tables are reported rescaled: the
-hidden table to a largest entry of 10 and the link table to a largest entry of 1 (the scales of
-the thesis's defaults). The thesis's learner keeps the default scale by construction.
+A table matters only up to scale for LBP, so learned tables are reported rescaled to the scales of the thesis's
+defaults (:func:`rescale`); the thesis's learner keeps them by construction.
 """
 from __future__ import annotations
 
@@ -63,11 +57,7 @@ def check_pair(observed, truth, grids_only=False) -> tuple:
 
 @dataclass
 class LearningResult:
-    """Learned tables plus the trace of the search.
-
-    ``trace`` rows are dicts: for the thesis learner {step, entry, value, alpha, mse, accepted};
-    for pseudo-likelihood {step, objective}.
-    """
+    """Learned tables plus the trace of the search (a list of dicts, one per step, keys by learner)."""
 
     hidden: np.ndarray
     link: np.ndarray
@@ -134,12 +124,14 @@ def learn_thesis(
     lbp_options: dict | None = None,
     progress: bool = True,
 ) -> LearningResult:
-    """The thesis's coordinate search on the 8 table entries, minimising LBP's MSE.
+    """The thesis's coordinate search on the 8 table entries, minimising LBP's MSE against the truth.
 
+    Each entry in turn is stepped by +alpha, else -alpha, keeping a step that lowers the MSE; when a round over the 8
+    improves nothing, alpha halves; the search stops when alpha falls below ``min_alpha`` (by default at the first
+    round without gain) or after ``max_rounds``.
     ``observed``, ``truth``: grids (OccupancyGrid or [y, x] arrays), truth 0/1; ``hidden``, ``link``: the starting
-    tables (the defaults, as in the thesis); ``alpha``: the step (the thesis's 0.01), ``min_alpha`` < alpha lets it
-    halve the step when stuck; ``max_rounds``: rounds over the 8 entries at most; ``lbp_options``: keyword arguments
-    for :func:`crfmap.crf.inference.lbp.infer` (e.g. the thesis's ``{"schedule": "thesis", "max_iter": 2}``).
+    tables; ``lbp_options``: for :func:`crfmap.crf.inference.lbp.infer` (the thesis's: ``{"schedule": "thesis",
+    "max_iter": 2}``).
 
     >>> rng = np.random.default_rng(0)
     >>> truth = (rng.uniform(size=(8, 8)) < 0.3).astype(float)
@@ -223,10 +215,9 @@ def learn_gradient(
 ) -> LearningResult:
     """Minimise LBP's MSE against the truth by gradient descent on the log-entries.
 
-    Zero entries are lifted to ``floor`` times their table's largest entry (a log needs a positive
-    number). Each step moves ``step_size`` (in log units, along the normalised gradient); a step
-    that lowers the MSE is kept and the size grows by 1.5, otherwise it halves; the search stops
-    when the size falls below ``min_step`` or after ``steps`` steps.
+    Zero entries are lifted to ``floor`` times their table's largest entry. Each step moves ``step_size`` (log
+    units) along the normalised gradient; a step that lowers the MSE is kept and the size grows by 1.5, else it
+    halves; the search stops when the size falls below ``min_step`` or after ``steps`` steps.
     """
     obs, tru = check_pair(observed, truth)
     H0, L0 = check_table(hidden, "hidden"), check_table(link, "link")
@@ -299,11 +290,10 @@ def _neighbour_counts(truth_occupied):
 
 
 def pseudolikelihood(observed, truth, hidden, link, mask=None):
-    """Mean log pseudo-likelihood of the truth and its gradient w.r.t. the log of the 8 entries.
+    """(mean log pseudo-likelihood of the truth, its gradient (8,) w.r.t. the log of the 8 entries).
 
     Cell i's conditional: ``P(x_i | x_N(i), o_i) ∝ phi_i(x_i) * prod_j hidden[x_i, x_j]`` with
-    ``phi_i(c) = link[c, 1-state] ...`` i.e. ``phi_i(c) = link[c, 0] * o_i + link[c, 1] * (1 - o_i)``.
-    Returns (value, gradient of shape (8,)).
+    ``phi_i(c) = link[c, 0] * o_i + link[c, 1] * (1 - o_i)``.
     """
     obs, tru = check_pair(observed, truth)
     return _pl_value_grad(_pl_terms(obs, tru, mask), check_table(hidden, "hidden"), check_table(link, "link"))
@@ -370,9 +360,8 @@ def learn_pseudolikelihood(
 ) -> LearningResult:
     """Maximise the pseudo-likelihood of the truth by gradient ascent on the log-entries (Adam).
 
-    Zero entries of the starting tables are lifted to ``floor`` (relative to the table's largest
-    entry) so their logs exist. ``mse_before``/``mse_after`` are LBP's MSE with the starting and
-    learned tables under ``lbp_options``, for comparison with :func:`learn_thesis`.
+    Zero entries are lifted as in :func:`learn_gradient`. ``mse_before``/``mse_after``: LBP's MSE with the starting
+    and learned tables under ``lbp_options``, for comparison with the other learners.
     """
     obs, tru = check_pair(observed, truth)
     check_int("steps", steps, low=1)

@@ -1,8 +1,6 @@
 """nav2_amcl's likelihood-field laser model, exactly as nav2 computes it: how well a scan fits a map at a pose.
 
-The scoring of maps by it (discrimination, pose search, paired comparisons) is :mod:`crfmap.assess.localisation`.
-
-The model, as read from ros-navigation/navigation2 (main at commit a3a97043ee93, 2026-08-21):
+The scoring of maps by it is :mod:`crfmap.assess.localisation`. The model, as read from ros-navigation/navigation2 (main at commit a3a97043ee93, 2026-08-21):
 
 - ``nav2_amcl/src/amcl_node.cpp``, ``convertMap`` (lines 1348-1373): an OccupancyGrid value of exactly 100
   is an obstacle (``occ_state = +1``), 0 is free, anything else unknown. The map nav2 loads from a file
@@ -14,18 +12,14 @@ The model, as read from ros-navigation/navigation2 (main at commit a3a97043ee93,
   ``enqueue`` (lines 49-141): ``occ_dist`` [m] is meant as each cell's Euclidean distance to the nearest obstacle
   cell, kept while the distance in cells is <= ``int(max_occ_dist / resolution)``, else ``max_occ_dist``; stored as
   float. :func:`distance_field` computes exactly that with ``scipy.ndimage.distance_transform_edt`` and the same
-  cut. nav2's own brushfire (a priority queue from the obstacle cells; a cell takes the distance to the obstacle its
-  first-popped neighbour came from) is not always the nearest obstacle: a line-by-line port (``nav2_brushfire`` in
-  the tests) is never below the exact distance but above it in 11-13 % of the cells of the Intel maps (raw, default
-  preset, OctoMap at 0.05 m), by up to 0.17 m. Scored with the port's field instead (Intel, the 455 held-out odd
-  scans), every metric moves by at most +0.01 log margin, 4 mm median translation error and 0.7 points of the found
-  share, in the same direction for the three maps, and no ordering between them changes.
+  cut. nav2's own brushfire (a cell takes the distance to the obstacle its first-popped neighbour came from) is at
+  times above the exact distance, never below (``nav2_brushfire`` in the tests ports it line by line).
 - ``nav2_amcl/include/nav2_amcl/map/map.hpp`` (lines 121-133) with ``convertMap``: a point (x, y) falls in
   cell ``floor((x - origin_x') / res + 0.5) + size_x / 2`` where ``origin_x' = origin_x + (size_x / 2) * res``
   (integer halves), i.e. AMCL *rounds* to the nearest cell corner index: it reads cell i as centred on
   ``origin_x + i * res``, half a cell below where the OccupancyGrid convention (and crfmap) puts it. This
-  module does the same, so a perfect map's best pose sits about (res/2, res/2) from the true one (for
-  0.05 m cells, 3.5 cm). Pass ``origin`` shifted by ``+res/2`` in x and y to measure without that shift.
+  module does the same, so a perfect map's best pose sits about (res/2, res/2) from the true one. Pass ``origin``
+  shifted by ``+res/2`` in x and y to measure without that shift.
 - ``nav2_amcl/src/sensors/laser/likelihood_field_model.cpp``, ``sensorFunction`` (lines 49-140): beams ``0, step, 2
   step, ...`` with ``step = max(1, (range_count - 1) // (max_beams - 1))`` (lines 68-73); a beam is skipped if its
   range is ``>= range_max`` (max-range readings, line 92) or NaN (line 97); its end point at the laser pose plus
@@ -95,10 +89,6 @@ class LaserModel:
 def nav2_lethal(probability) -> np.ndarray:
     """Boolean [y, x]: the cells nav2_amcl takes for obstacles in the map crfmap writes from ``probability``.
 
-    P is rounded to percent (-1 where exactly 0.5) as :meth:`crfmap.grid.OccupancyGrid.to_int8`, a trinary
-    map_server image marks values >= round(100 * 0.65) occupied, nav2's loader reads those back as 100,
-    and AMCL's ``convertMap`` makes exactly the 100s obstacles.
-
     >>> nav2_lethal(np.array([[0.5, 0.644, 0.646, 1.0]])).tolist()
     [[False, False, True, True]]
     """
@@ -130,14 +120,11 @@ def distance_field(lethal, resolution, max_dist=LaserModel.laser_likelihood_max_
 
 @dataclass
 class Beams:
-    """The beams nav2_amcl uses from each scan: ``ranges`` [n, b] (NaN where skipped) at ``bearings`` [b].
-
-    ``range_max`` is the scan's (or ``laser_max_range`` if smaller), the ``z_rand / range_max`` term's.
-    """
+    """The beams nav2_amcl uses from each scan: ``ranges`` [n, b] (NaN where skipped) at ``bearings`` [b]."""
 
     ranges: np.ndarray  # (n_scans, n_used) float64 [m], NaN = beam skipped
     bearings: np.ndarray  # (n_used,) [rad] in the laser frame
-    range_max: float  # [m]
+    range_max: float  # [m] the scan's, or laser_max_range if smaller: the z_rand / range_max term's
 
     @classmethod
     def from_scans(cls, scans: ScanSet, model: LaserModel = LaserModel()) -> "Beams":
@@ -190,8 +177,7 @@ def beam_indices(n_beams, max_beams=LaserModel.max_beams) -> np.ndarray:
 class LikelihoodField:
     """A map as nav2_amcl's likelihood-field model sees it: ``occ_dist`` [y, x] and where it lies.
 
-    ``origin`` is the OccupancyGrid origin (cell (0, 0)'s corner, x and y [m]); cells are looked up
-    as AMCL does (rounded, see the module doc).
+    ``origin``: cell (0, 0)'s corner, as an OccupancyGrid's; cells are looked up as AMCL does (see the module doc).
     """
 
     occ_dist: np.ndarray  # (height, width) float32 [m]

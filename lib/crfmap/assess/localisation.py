@@ -1,9 +1,8 @@
 """Localisation on a map: nav2_amcl's likelihood-field laser model, scored on held-out scans.
 
-A map is good for a robot if the robot can find itself on it. nav2 localises with AMCL, whose default
-laser model (``laser_model_type: likelihood_field``) scores a scan at a pose by how far each beam's end
-point lands from the nearest obstacle of the map. This module computes that model exactly as nav2_amcl
-does and asks two questions of each held-out scan (the scans the map was *not* built from):
+A map is good for a robot if the robot can find itself on it. nav2 localises with AMCL, whose default laser model
+scores a scan at a pose by how far each beam's end point lands from the nearest obstacle of the map
+(:mod:`crfmap.assess.likelihood_field`). Two questions of each held-out scan (the map was *not* built from it):
 
 - discrimination: does the scan score higher at its corrected (true) laser pose than at poses offset by
   5-30 cm and 2-10 degrees (:func:`pose_offsets`)? Reported as the share of offsets the true pose beats
@@ -14,8 +13,6 @@ does and asks two questions of each held-out scan (the scans the map was *not* b
 
 :func:`compare_localisation` scores several maps on the same scans, offsets and starting poses, and gives
 each metric's paired difference to a reference map (the raw grid) with a bootstrap interval over scans.
-
-The model and where each of its rules comes from in nav2's source: :mod:`crfmap.assess.likelihood_field`.
 """
 from __future__ import annotations
 import math
@@ -26,6 +23,7 @@ from crfmap.checks import check_int, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.recording import ScanSet
 from crfmap.assess.likelihood_field import Beams, LaserModel, LikelihoodField, _check_origin
+from crfmap.assess.scansplit import percentile_interval
 
 OFFSET_TRANSLATION = (0.05, 0.30)  # [m] the discrimination offsets' distance from the true pose
 OFFSET_ROTATION_DEG = (2.0, 10.0)  # [deg] and their turn
@@ -45,10 +43,8 @@ METRICS = {  # name: higher is better
 
 def pose_offsets(n_scans, n_offsets, seed=0, translation=OFFSET_TRANSLATION,
                  rotation_deg=OFFSET_ROTATION_DEG) -> np.ndarray:
-    """Seeded pose offsets (dx [m], dy [m], dyaw [rad]): (n_scans, n_offsets, 3).
-
-    Each moves by a distance drawn uniformly in ``translation`` [m] in a uniform direction and turns by
-    an angle drawn uniformly in ``rotation_deg`` with a random sign.
+    """Seeded pose offsets (dx [m], dy [m], dyaw [rad]), (n_scans, n_offsets, 3): a uniform distance in
+    ``translation`` [m] in a uniform direction, a uniform turn in ``rotation_deg`` with a random sign.
 
     >>> d = pose_offsets(2, 5, seed=1)
     >>> d.shape, bool(np.all((np.hypot(d[..., 0], d[..., 1]) >= 0.05) & (np.abs(np.degrees(d[..., 2])) >= 2)))
@@ -85,11 +81,10 @@ def search_poses(field: LikelihoodField, beams: Beams, starts, step=0.08, step_d
                  min_step=0.005, max_rounds=80) -> np.ndarray:
     """Coarse-to-fine grid search of each scan's laser pose maximising :meth:`LikelihoodField.log_weights`.
 
-    Every round scores the ``(2 span + 1)^3`` poses ``centre + (i step, j step, k step_deg)``,
-    ``-span <= i, j, k <= span``, and moves to the best; when the centre is best (ties keep it) the
-    steps halve. A scan stops once its translation step is below ``min_step`` [m] (the angular step
-    shrinks alike), or after ``max_rounds``. The first grid spans +-16 cm and +-6 degrees by default, and
-    the search walks on from there, so starts 30 cm / 10 degrees off are in reach. Returns (n, 3).
+    Every round scores the ``(2 span + 1)^3`` poses ``centre + (i step, j step, k step_deg)``, ``-span <= i, j, k <=
+    span``, and moves to the best; when the centre is best (ties keep it) the steps halve. A scan stops once its
+    translation step is below ``min_step`` [m], or after ``max_rounds``. The first grid spans +-16 cm and +-6 degrees
+    by default and the search walks on from there, so starts 30 cm / 10 degrees off are in reach. Returns (n, 3).
     """
     starts = _check_poses("starts", starts)
     if len(starts) != len(beams):
@@ -119,13 +114,9 @@ def search_poses(field: LikelihoodField, beams: Beams, starts, step=0.08, step_d
 
 @dataclass
 class LocalisationResult:
-    """Per-scan localisation scores of one map on held-out scans (see the module doc).
+    """Per-scan localisation scores of one map on held-out scans; ``summary()`` gives the :data:`METRICS`."""
 
-    ``scan_index`` indexes the held-out ScanSet given to :func:`localise`; ``summary()`` gives the
-    :data:`METRICS` over scans.
-    """
-
-    scan_index: np.ndarray  # (n,) held-out scans scored
+    scan_index: np.ndarray  # (n,) the scans scored, indices into the ScanSet given to localise
     true_log_weight: np.ndarray  # (n,) log p at the corrected laser pose
     offset_log_weight: np.ndarray  # (n, n_offsets) log p at the offset poses
     found_poses: np.ndarray  # (n, 3) where the pose search ended
@@ -155,10 +146,9 @@ def localise(probability, resolution, origin, scans: ScanSet, *, model: LaserMod
              max_scans=500, n_offsets=16, seed=0) -> LocalisationResult:
     """Score the map ``probability`` [y, x] (cell (0, 0)'s corner at ``origin``) on held-out ``scans``.
 
-    ``scans.laser_poses`` are the corrected (true) laser poses in the map frame. At most ``max_scans``
-    scans are used, evenly spaced over the set; scans with no beam AMCL uses are left out (they carry
-    no information: every pose scores alike). Offsets and starting poses depend on ``seed`` and the
-    scans only, never on the map, so maps scored with one seed are scored on the same poses.
+    ``scans.laser_poses`` are the corrected (true) laser poses in the map frame. At most ``max_scans`` scans are
+    used, evenly spaced; scans with no beam AMCL uses are left out (every pose scores alike). Offsets and starting
+    poses depend on ``seed`` and the scans only, so maps scored with one seed are scored on the same poses.
 
     >>> from crfmap.grid import OccupancyGrid
     >>> from crfmap.recording import ScanSet
@@ -208,12 +198,10 @@ def compare_localisation(maps: dict, resolution, origin, scans: ScanSet, referen
     """Localisation scores of several maps ``{method: P [y, x]}`` on the same held-out scans, paired.
 
     Returns ``{method: {metric: value, metric + "_ci": (lo, hi), metric + "_diff": value - reference's,
-    metric + "_diff_ci": (lo, hi), "scans": n, "seconds": s}}`` for the :data:`METRICS`; intervals are
-    percentile bootstrap intervals over scans (scans resampled with replacement, ``n_boot`` times; the
-    same resamples for every method, so a difference's interval is paired). ``n_boot=0`` skips them.
-    ``options`` go to :func:`localise` (``model``, ``max_scans``, ``n_offsets``); ``seed`` seeds the poses
-    and the resamples. Scans are resampled one by one: neighbouring held-out scans are correlated, so
-    thin the set (``max_scans``) to scans seconds apart for intervals that hold.
+    metric + "_diff_ci": (lo, hi), "scans": n, "seconds": s}}`` for the :data:`METRICS`; intervals are percentile
+    bootstrap intervals over scans, the same resamples for every method (``n_boot=0``: none). ``options`` go to
+    :func:`localise`; ``seed`` seeds the poses and the resamples. Scans are resampled one by one, but neighbouring
+    scans are correlated: thin the set (``max_scans``) to scans seconds apart for intervals that hold.
 
     >>> from crfmap.grid import OccupancyGrid
     >>> from crfmap.recording import ScanSet
@@ -243,7 +231,6 @@ def compare_localisation(maps: dict, resolution, origin, scans: ScanSet, referen
     results = {name: localise(p, resolution, origin, scans, seed=seed, **options) for name, p in maps.items()}
     n = len(results[reference].scan_index)
     resamples = np.random.default_rng([check_int("seed", seed, low=0), 2]).integers(0, n, (n_boot, n))
-    alpha = (1 - level) / 2
     boot = {name: {m: _statistic(m, v[resamples], axis=1) for m, v in r.per_scan.items()} if n_boot else {}
             for name, r in results.items()}
     out = {}
@@ -255,8 +242,8 @@ def compare_localisation(maps: dict, resolution, origin, scans: ScanSet, referen
             entry[m] = value
             entry[m + "_diff"] = value - results[reference].summary()[m]
             if n_boot:
-                entry[m + "_ci"] = _interval(boot[name][m], alpha)
-                entry[m + "_diff_ci"] = _interval(boot[name][m] - boot[reference][m], alpha)
+                entry[m + "_ci"] = percentile_interval(boot[name][m], level)
+                entry[m + "_diff_ci"] = percentile_interval(boot[name][m] - boot[reference][m], level)
         entry.update(scans=n, seconds=r.seconds)
         out[name] = entry
     return out
@@ -267,10 +254,6 @@ def _statistic(metric, values, axis=None):
     reduce = np.median if metric in ("translation_error", "rotation_error") else np.mean
     result = reduce(values, axis=axis)
     return float(result) if axis is None else result
-
-
-def _interval(values, alpha):
-    return (float(np.quantile(values, alpha)), float(np.quantile(values, 1 - alpha)))
 
 
 def _spread(indices, count):

@@ -91,9 +91,8 @@ def confusion(pred, truth, mask=None, threshold=0.5) -> Confusion:
 def roc_curve(pred, truth, mask=None, include_unknown=True):
     """ROC curve: (false positive rate, true positive rate, thresholds), from (0, 0) to (1, 1).
 
-    A cell counts as predicted occupied when P >= threshold; thresholds run over every
-    distinct predicted value, high to low. Unknown cells (P = 0.5) are included by default,
-    since ranking them is part of the classifier; ``include_unknown=False`` drops them.
+    A cell counts as predicted occupied when P >= threshold, for every distinct predicted P, high to low. Unknown
+    cells (P = 0.5) are included by default, since ranking them is part of the classifier.
 
     >>> fpr, tpr, _ = roc_curve([[0.9, 0.8, 0.3, 0.1]], [[1, 0, 1, 0]])
     >>> fpr.tolist(), tpr.tolist()

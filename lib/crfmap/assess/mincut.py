@@ -1,10 +1,7 @@
-"""The exact MAP labelling of the grid CRF by a graph cut (PyMaxflow).
+"""The exact MAP labelling of the grid CRF by a graph cut (PyMaxflow): a baseline beside LBP and a check of it.
 
-A baseline beside LBP (:mod:`crfmap.assess.baselines`, ``crfmap evaluate``, the rooms experiment)
-and a check of it (``crfmap bench``'s ``pymaxflow-map`` row): with a symmetric attractive hidden
-table the CRF's energy is submodular, so a Boykov-Kolmogorov cut finds its exact minimum (the energy itself, the
-test reference: ``crfstudy.references.crf_energy``). PyMaxflow is
-optional (the ``compare`` extra); :func:`graph_cut_map` imports it when called.
+With a symmetric attractive hidden table the CRF's energy is submodular, so a Boykov-Kolmogorov cut finds its exact
+minimum. PyMaxflow is optional (the ``compare`` extra); :func:`graph_cut_map` imports it when called.
 """
 from __future__ import annotations
 

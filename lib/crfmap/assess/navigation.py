@@ -1,48 +1,36 @@
 """What a navigation stack does with a map: nav2's reading of it, scored on a scan split.
 
-nav2 does not read P(occupied): it reads the trinary map ``crfmap infer`` writes. Each cell's P is
-rounded to a percent (:meth:`crfmap.grid.OccupancyGrid.to_int8`), map_saver's trinary rule turns that
-into a grey pixel (0 occupied when >= 65, 254 free when <= 20, else 205), nav2's map_server loads the
-pixel back with the YAML's thresholds 0.65 / 0.196 (:mod:`crfmap.io.nav2_loader`) and the costmap's
-static layer makes 100 lethal, -1 unknown and 0 free (:mod:`crfmap.io.nav2_costmap`).
-:func:`nav2_values` composes exactly those rules, so a cell is lethal here when it is lethal in the
-written file: P above 0.645 (the percent rounding moves nav2's 0.65 down by half a percent) and free
-when P is at most 0.205 (up by 0.9 percent from 0.196); P = 0.5 exactly is unknown. Peers' probabilities go through the same rules.
+nav2 does not read P(occupied): it reads the trinary map ``crfmap infer`` writes, loaded by map_server and made
+lethal / free / unknown by the costmap's static layer. :func:`nav2_classes` composes exactly those rules
+(:func:`crfmap.io.nav2_values.nav2_values`, :mod:`crfmap.io.nav2_costmap`), so a cell is lethal here when it is
+lethal in the written file; every row's P (peers' too) goes through them.
 
-:func:`nav_scores` scores that reading against the second half of a :class:`ScanSplit`
-(held-out occupied: ``split.labels()``), per group of cells (``all`` / ``seen`` / ``unseen`` by the
-first half, :data:`crfmap.assess.scansplit.GROUPS`):
+:func:`nav_scores` scores that reading against the second half of a :class:`ScanSplit` (held-out occupied:
+``split.labels()``), per group of cells of :data:`crfmap.assess.scansplit.GROUPS`:
 
-- ``lethal_recall``: held-out occupied cells the map calls lethal, over held-out occupied cells;
-- ``lethal_precision``: held-out occupied cells among the held-out observed cells called lethal;
-- ``miss_rate`` (dangerous misses): held-out occupied cells the map calls *free*, over held-out
-  occupied cells; ``far_miss_rate``: those of them farther than ``cover_radius`` (0.5 m) from every
-  lethal cell, where the costmap's inflation does not cover the hole, and ``far_miss_share`` their
-  share of the misses; ``unknown_rate``: held-out occupied cells left unknown (recall + unknown rate
-  + miss rate = 1);
-- ``ghost_rate`` (ghost obstacles): cells the second half passed at least twice and never hit,
-  called lethal, over such cells;
-- ``free_error``: held-out occupied cells among the held-out observed cells called free (in the
-  ``unseen`` group: how often a never-observed cell the map turned free is a wall);
-- ``face_offset`` (where the wall face the robot sees is): over the held-out *face* cells (held-out occupied
-  cells with a held-out free cell beside them: the face the scans saw), the mean distance [cells] to the
-  map's nearest lethal cell, capped at :data:`FACE_CAP` (a face farther than that is a missed wall, which
-  ``lethal_recall`` counts). A map whose lethal cells sit on the observed face scores near 0; a wall
-  moved one cell back scores about 1;
-- ``auc`` and ``nll`` by scikit-learn's ``roc_auc_score`` and ``log_loss`` (P clipped to
-  :data:`crfmap.assess.scansplit.LOG_FLOOR`, so the NLL is the scan split's log-loss);
+- ``lethal_recall``: held-out occupied cells called lethal, over held-out occupied cells; ``lethal_precision``:
+  held-out occupied cells among the held-out observed cells called lethal;
+- ``miss_rate`` (dangerous misses): held-out occupied cells called *free*, over held-out occupied cells;
+  ``far_miss_rate``: those farther than ``cover_radius`` from every lethal cell (a hole the costmap's inflation
+  leaves open), ``far_miss_share`` their share of the misses; ``unknown_rate``: held-out occupied cells left unknown
+  (recall + unknown rate + miss rate = 1);
+- ``ghost_rate``: cells the second half passed at least :data:`GHOST_PASSES` times and never hit, called lethal, over
+  such cells;
+- ``free_error``: held-out occupied cells among the held-out observed cells called free (in ``unseen``: how often a
+  never-observed cell the map turned free is a wall);
+- ``face_offset``: over the held-out *face* cells (held-out occupied cells beside a held-out free cell), the mean
+  distance [cells] to the map's nearest lethal cell, capped at :data:`FACE_CAP` (farther is a missed wall): near 0
+  when the lethal cells sit on the observed face, about 1 for a wall one cell back;
+- ``auc`` and ``nll`` by scikit-learn (P clipped to :data:`crfmap.assess.scansplit.LOG_FLOOR`: the scan split's
+  log-loss);
 - counts: ``occupied``, ``lethal``, ``misses``, ``far_misses``, ``ghost_candidates``, ``ghosts``, ``free``,
   ``face_cells`` (and ``face_offset_cells``, the sum of their capped distances).
 
-Each ratio gets a 95 % interval and the interval of its paired difference to the ``reference`` row
-(the raw grid) from the scan split's spatial-block bootstrap: the resamples of
-:func:`crfmap.assess.scansplit.score` (same seed, same draws), a ratio resampled as the ratio of its
-block sums. Per map (``"map"``, no interval; differences to the reference): ``unknown_free``, the
-cells the first half never observed that the map calls free (``unknown_free_observed`` of them the
-second half observed, ``unknown_free_occupied`` of those occupied), and the wall shape of
-:func:`wall_shape`: ``thickness`` (lethal cells per cell of lethal skeleton length, i.e. lethal cells
-per metre of skeleton times the resolution: a one-cell wall is 1) and ``components_per_10m`` (8-connected
-lethal components per 10 m of skeleton: fewer is more continuous).
+Each ratio gets an interval, and one of its paired difference to the ``reference`` row, from the resamples of
+:func:`crfmap.assess.scansplit.score` (a ratio resampled as the ratio of its block sums). Per map (``"map"``, no
+interval): ``unknown_free``, the cells the first half never observed that the map calls free
+(``unknown_free_observed`` of them the second half observed, ``unknown_free_occupied`` of those occupied), and the
+wall shape of :func:`wall_shape`.
 
 >>> from crfmap.assess.scansplit import ScanSplit
 >>> sp = ScanSplit(first_hits=np.array([[0, 3, 0, 0]]), first_passes=np.array([[2, 0, 0, 0]]),
@@ -101,10 +89,8 @@ def nav2_classes(probability, loader: str = DEFAULT_LOADER) -> tuple:
 def skeleton_length(skeleton) -> float:
     """Length [cells] of a one-cell-wide skeleton: its 8-neighbour steps plus one cell per 8-connected piece.
 
-    A step to a side neighbour is 1, to a corner neighbour sqrt 2 unless the two share a side
-    neighbour on the skeleton (then the corner step only cuts an L's corner, already counted as two
-    side steps). Each piece adds one cell for its two half-cell ends, so a straight line of n cells
-    is n long and a single cell is 1.
+    A side step is 1, a corner step sqrt 2 unless the two cells share a side neighbour on the skeleton (an L's
+    corner, already two side steps). A piece's two half-cell ends add one cell: a line of n cells is n long.
 
     >>> skeleton_length(np.eye(3, dtype=bool)), skeleton_length(np.ones((1, 5), bool))
     (3.8284271247461903, 5.0)
@@ -124,10 +110,9 @@ def skeleton_length(skeleton) -> float:
 def wall_shape(lethal, resolution: float) -> dict:
     """Thickness and continuity of a map's lethal cells (boolean [y, x]) on ``resolution`` [m] cells.
 
-    ``thickness``: lethal cells over the length [cells] of their skeleton (scikit-image's
-    ``skeletonize``; :func:`skeleton_length`): a one-cell-thick straight wall is 1, a three-cell one
-    about 3. ``components``: 8-connected lethal pieces (scipy.ndimage.label);
-    ``components_per_10m``: per 10 m of skeleton (fewer: more continuous walls). NaN without lethal cells.
+    ``thickness``: lethal cells over the length [cells] of their skeleton (:func:`skeleton_length` of scikit-image's
+    ``skeletonize``): a one-cell wall is 1. ``components``: 8-connected lethal pieces; ``components_per_10m``: per
+    10 m of skeleton (fewer: more continuous walls). NaN without lethal cells.
 
     >>> wall = np.zeros((5, 12), bool); wall[2, 1:11] = True
     >>> s = wall_shape(wall, 0.05)
@@ -161,8 +146,7 @@ def _far_from_lethal(lethal, resolution, radius):
 def cell_counts(split: ScanSplit, lethal, free, far) -> dict:
     """Per-cell indicators {count name: boolean [y, x]} of :data:`COUNTS` for one map's classes on ``split``.
 
-    ``lethal`` / ``free``: the map's classes; ``far``: cells beyond the cover radius of every lethal cell.
-    Only held-out observed cells count (``split.group("all")``).
+    ``far``: cells beyond the cover radius of every lethal cell. Only held-out observed cells count.
     """
     observed = split.group("all")
     occupied = split.labels()
@@ -211,13 +195,10 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
                loader: str = DEFAULT_LOADER, scores: dict | None = None) -> dict:
     """nav2's reading of each map ``{name: [y, x] P}`` scored against the split's second half.
 
-    Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), metric + "_diff": name minus
-    reference, metric + "_diff_ci": (lo, hi), count: int, ...}, "map": {...}}}`` with the metrics of
-    the module doc, for every group of :data:`crfmap.assess.scansplit.GROUPS`. Intervals use
-    :func:`crfmap.assess.scansplit.block_resamples` (``n_boot=0``: none). The intervals of ``auc`` and
-    ``nll`` are :func:`crfmap.assess.scansplit.score`'s (``auc`` and ``logloss``, the same draws):
-    pass its result as ``scores`` when it was computed already (same ``n_boot``, ``block``, ``seed``,
-    ``reference``), else it is computed here.
+    Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), metric + "_diff": name minus reference,
+    metric + "_diff_ci": (lo, hi), count: int, ...}, "map": {...}}}`` with the metrics of the module doc
+    (``n_boot=0``: no intervals). The intervals of ``auc`` and ``nll`` are :func:`crfmap.assess.scansplit.score`'s:
+    pass its result as ``scores`` if it was computed already (same ``n_boot``, ``block``, ``seed``, ``reference``).
 
     >>> from crfmap.assess.scansplit import ScanSplit
     >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))

@@ -1,24 +1,12 @@
 """Published alternatives as scan-split rows: OctoMap's update and Bayesian Hilbert maps.
 
-Both peers are this project's implementations, not the authors' programs: OctoMap's clamped
-log-odds update rewritten on a 2-D grid (:mod:`crfmap.mapping.octomap`; its update is checked cell
-by cell against the real OctoMap library, through octomap-python, on the same rays:
-``tests/mapping/test_octomap.py::test_matches_the_octomap_library``) and the Bayesian Hilbert map
-rewritten with sparse features from the authors' BHM2D update (:mod:`crfmap.mapping.hilbert`).
-
-Each peer maps the first half's scans (``split.first_scans``) on the split's grid; the rows are
-scored like every other row (:func:`crfmap.assess.scansplit.score`).
-
-- ``octomap``: :func:`crfmap.mapping.octomap.octomap_grid` with :data:`OCTOMAP_INTEL` (not OctoMap's defaults);
-- ``hilbert``: :func:`crfmap.mapping.hilbert.hilbert_grid` with its module's constants.
-
-Both sets of constants were chosen on Intel's scan split (5 cm, even scans map, odd scans score)
-by the certainty preset's own rule: a coordinate search by the Brier score on all observed cells,
-each constant on a grid of 5-6 values, widened until every chosen value is interior
-(``crfstudy.analysis.peer_search``, which keeps the records), then fixed for every recording.
-
-:func:`peer_rows` returns the predictions and each peer's wall time (a benchmark number:
-it says how long a map took on this machine, nothing more).
+Both are this project's implementations, not the authors' programs (:mod:`crfmap.mapping.octomap`, checked cell by
+cell against the OctoMap library; :mod:`crfmap.mapping.hilbert`, from the authors' BHM2D update). Each maps the
+split's first half (``split.first_scans``) on the split's grid and is scored like every other row
+(:func:`crfmap.assess.scansplit.score`). Their constants were chosen on Intel's scan split by the certainty preset's
+rule (a coordinate search by the Brier score, every chosen value interior to its grid;
+``crfstudy.analysis.peer_search`` keeps the records), then fixed for every recording. The wall times
+:func:`peer_rows` returns are benchmark numbers of this machine.
 """
 from __future__ import annotations
 
@@ -27,18 +15,9 @@ import time
 from crfmap.errors import InputError
 
 
-# OctoMap's constants for the peer row, chosen on Intel (crfstudy.analysis.peer_search.octomap_search; cache
-# study/crfstudy/analysis/peer_search_octomap_intel.json). The library's defaults (hit 0.7, miss 0.4, clamping
-# 0.1192 / 0.971: crfmap.mapping.octomap.P_HIT, ...) score 0.0459581 there; three grids were searched (the first two
-# chose a clamping bound on their edge), 72 configurations in the last one, 4 rounds. The upper clamp is flat above
-# 0.999 (Brier within 4e-5): on this score OctoMap's upper clamp hardly matters once it is above 0.99. Scoring all 1080
-# configurations of the last grid finds the same optimum. What the rule buys on Intel (`crfmap evaluate`): Brier
-# 0.0460 -> 0.0263, ECE 0.142 -> 0.011, but AUC 0.9745 -> 0.9565 and, read by nav2, lethal recall 63.6 -> 54.2 % and
-# dangerous misses 2.2 -> 24.3 % of the held-out occupied cells (raw grid 10.3 %): Brier over all observed cells,
-# most of them free, favours a map that frees cells fast. (The gated default was chosen by log-loss with occupied
-# cells weighted 3x; by that score the same search keeps hit / miss 0.7 / 0.4, its clamps on the grid's edges.)
+# OctoMap's constants for the peer row, chosen on Intel (crfstudy.analysis.peer_search.octomap_search). Brier over all
+# observed cells, most of them free, favours a map that frees cells fast: see the octomap-defaults row.
 OCTOMAP_INTEL = {"p_hit": 0.8, "p_miss": 0.2, "clamp_min": 0.005, "clamp_max": 0.9999}
-# The search records (each constant over its grid, the scores) are the study's: crfstudy.analysis.peer_search.
 
 
 def octomap_row(split, **options):
@@ -62,17 +41,14 @@ def hilbert_row(split, progress=False, **options):
 
 
 def octomap_defaults_row(split, **options):
-    """OctoMap's update at the OctoMap library's own defaults (hit 0.7, miss 0.4, clamping 0.1192 / 0.971): the peer
-    as users run it out of the box. Tuned by scan-split Brier (``octomap``) it frees cells quickly and opens walls
-    to nav2; at its defaults a cell needs about four misses to read free. Both rows are scored, so neither choice
-    flatters the preset."""
+    """OctoMap's update at the OctoMap library's own defaults: the peer as users run it out of the box (tuned by Brier,
+    ``octomap`` frees cells quickly and opens walls to nav2). Both rows are scored, so neither choice flatters the preset."""
     from crfmap.mapping.octomap import octomap_grid
 
     return octomap_grid(_scans(split), split.resolution, bounds=split.bounds, **options).probability
 
 
-# The registry of published peers: name -> row function (split, **options) -> [y, x] P. compare(), crfmap evaluate
-# and the notebooks read their rows from here; a new peer is one function and one entry.
+# The registry of published peers: name -> row function (split, **options) -> [y, x] P; a new peer is one entry.
 _ROWS = {"octomap": octomap_row, "octomap-defaults": octomap_defaults_row, "hilbert": hilbert_row}
 PEERS = tuple(_ROWS)
 

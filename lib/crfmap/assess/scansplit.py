@@ -13,13 +13,12 @@ Scores (:func:`score`) are reported for three groups of second-half cells:
 - ``"seen"``: those the first half also observed (the map had evidence there);
 - ``"unseen"``: those the first half never observed (the raw grid says 0.5 there; only filling-in can help).
 
-Metrics: the Brier score (mean squared error of P against the 0/1 label), log-loss (P clipped to [1e-6, 1 - 1e-6]),
-AUC (ties count one half) and the recall of observed walls (the share of occupied-labelled cells with P > 0.5).
-Confidence intervals come from a *spatial-block bootstrap*: the grid is cut into ``block`` x ``block`` cell squares,
-and squares (not cells, which are correlated with their neighbours) are resampled with replacement. Predictions
-scored together share the resamples, so :func:`score` also gives intervals of the paired difference to a reference
-prediction; :func:`block_resamples` hands the same draws to other scorers (:mod:`crfmap.assess.navigation`: the map
-as nav2 reads it, which :func:`compare` adds under ``"_nav"``).
+Metrics: the Brier score (mean squared error of P against the 0/1 label), log-loss (P clipped to [LOG_FLOOR,
+1 - LOG_FLOOR]), AUC (ties count one half) and the recall of observed walls (the share of occupied-labelled cells
+with P > 0.5). Confidence intervals come from a *spatial-block bootstrap*: squares of ``block`` x ``block`` cells
+(not cells, which are correlated with their neighbours) are resampled with replacement. Predictions scored together
+share the resamples, so :func:`score` also gives intervals of the paired difference to a reference prediction;
+:func:`block_resamples` hands the same draws to other scorers (:mod:`crfmap.assess.navigation`).
 
 >>> split = ScanSplit(first_hits=np.array([[0, 3, 0]]), first_passes=np.array([[2, 0, 0]]),
 ...                   second_hits=np.array([[0, 2, 1]]), second_passes=np.array([[3, 0, 0]]))
@@ -39,7 +38,7 @@ import numpy as np
 from crfmap.assess.block_bootstrap import _auc_resampled, _block_counts, _block_ids, _draws
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
-from crfmap.mapping.builder import count_hits, scan_bounds
+from crfmap.mapping.builder import arctan_probability, count_hits, scan_bounds
 
 GROUPS = ("all", "seen", "unseen")
 METRICS = ("brier", "logloss", "auc", "wall_recall")
@@ -66,9 +65,8 @@ def split_scans(scans, parity: int):
 class ScanSplit:
     """Hit counts ([y, x] int arrays on one grid) of the two halves of a recording's scans.
 
-    ``first_*`` build the map; ``second_*`` only score it. ``first_scans`` and ``second_scans``
-    (optional, set by :func:`scan_split`) keep each half's ScanSet, for what needs the scans
-    themselves (the log-odds grid from the first half; scoring the map by the second half's scans).
+    ``first_*`` build the map; ``second_*`` only score it. ``first_scans`` and ``second_scans`` (optional, set by
+    :func:`scan_split`) keep each half's ScanSet for what needs the scans themselves.
     """
 
     first_hits: np.ndarray
@@ -114,8 +112,7 @@ class ScanSplit:
 
     def raw_probability(self) -> np.ndarray:
         """The first half's grid with the thesis's arctan model (as :func:`crfmap.mapping.build_grid`)."""
-        x = self.first_hits.astype(np.float64) - self.first_passes
-        return 0.5 + np.arctan(x) / math.pi
+        return arctan_probability(self.first_hits, self.first_passes)
 
     def raw_grid(self) -> OccupancyGrid:
         """:meth:`raw_probability` as an OccupancyGrid with the split's resolution and origin."""
@@ -125,8 +122,7 @@ class ScanSplit:
 def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress: bool = False) -> ScanSplit:
     """Count the hits of the ``parity`` half (even scans: 0) and of the other half on one grid.
 
-    The grid covers every scan of the recording (:func:`crfmap.mapping.builder.scan_bounds`, snapped to multiples of
-    ``resolution`` like :func:`crfmap.mapping.build_grid`), unless ``bounds`` (xmin, ymin, xmax, ymax) [m] is given.
+    The grid is :func:`crfmap.mapping.build_grid`'s of all the scans, unless ``bounds`` (xmin, ymin, xmax, ymax) [m].
 
     >>> from crfmap.recording import ScanSet
     >>> r = np.array([[0.36], [0.26]], np.float32)
@@ -162,8 +158,7 @@ class _Scorer:
     """
 
     def __init__(self, p, y, inverse, n_blocks, auc=True, logloss=True, counts=None):
-        """``logloss=False``: its sums stay 0 (not asked for); ``counts``: the (cells, walls) sums per block,
-        which do not depend on ``p`` (:func:`_layout` keeps them per group)."""
+        """``logloss=False``: its sums stay 0; ``counts``: the (cells, walls) sums per block, if known."""
         cells, walls = counts if counts is not None else _block_counts(y, inverse, n_blocks)
         if logloss:
             q = np.clip(p, LOG_FLOOR, 1 - LOG_FLOOR)
@@ -213,12 +208,10 @@ class _Scorer:
 
 
 def _layout(split, block) -> dict:
-    """{group: (mask, labels, block ids, each cell's block index, (cells, walls) per block)} of ``split`` scored
-    in ``block``-cell squares.
+    """{group: (mask, labels, block ids, each cell's block index, (cells, walls) per block)} in ``block``-cell squares.
 
-    The last one is kept on the split with the four count arrays it was made from (the same objects, and
-    ``block``, or it is made again): scoring many predictions on one split one :func:`score` call at a time
-    (a phase diagram, a search) finds the cells and blocks once.
+    Kept on the split with the count arrays it was made from (the same objects and ``block``, or it is made again):
+    scoring many predictions on one split one :func:`score` call at a time finds the cells and blocks once.
     """
     counts = (split.first_hits, split.first_passes, split.second_hits, split.second_passes)
     kept = split.__dict__.get("_layout")  # (the count arrays it was made from, block, layout)
@@ -267,9 +260,8 @@ def score(split: ScanSplit, predictions: dict, n_boot: int = 200, block: int = D
     """Score predictions ``{name: [y, x] P(occupied)}`` against the second half, with intervals.
 
     Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), ...}}}``; with a ``reference`` name, also
-    ``metric + "_diff"`` (name minus reference) and its interval ``metric + "_diff_ci"`` from the same (paired)
-    resamples. ``n_boot=0`` skips the intervals; ``groups`` and ``metrics`` limit the work to what is asked for
-    (without ``"auc"`` nothing is sorted).
+    ``metric + "_diff"`` (name minus reference) and its paired interval ``metric + "_diff_ci"``. ``n_boot=0`` skips
+    the intervals; ``groups`` and ``metrics`` limit the work (without ``"auc"`` nothing is sorted).
 
     >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))
     >>> s = score(sp, {"raw": sp.raw_probability()}, n_boot=0, groups=("all",), metrics=("brier",))
@@ -318,10 +310,8 @@ class GroupBlocks:
 
 
 def block_resamples(split: ScanSplit, n_boot: int = 200, block: int = DEFAULT_BLOCK, seed: int = 0) -> dict:
-    """``{group: GroupBlocks}``: the spatial-block resamples :func:`score` uses (the same seed, the same draws).
-
-    Every group draws its resamples in the order of :data:`GROUPS` from one generator seeded with
-    ``seed``, so anything scored with these draws is paired with :func:`score`'s intervals.
+    """``{group: GroupBlocks}``: the spatial-block resamples :func:`score` uses (the same seed, the same draws), so
+    anything scored with them is paired with :func:`score`'s intervals.
 
     >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))
     >>> r = block_resamples(sp, n_boot=3, block=4)

@@ -1,7 +1,4 @@
-"""Beam kernels of the grid builder: classify readings, clip rays, count hits (private).
-
-Used by :mod:`crfmap.mapping.builder` (whole recordings and :class:`crfmap.mapping.builder.HitCounter`, one
-scan at a time). Plain arrays and scalars in, counts out; see the builder for the model.
+"""Beam kernels of the grid builder (:mod:`crfmap.mapping.builder`, private): classify readings, clip rays, count hits.
 """
 from __future__ import annotations
 
@@ -12,8 +9,7 @@ from numba import njit
 
 from crfmap.raycast import bresenham_step
 
-# Beam kinds the kernels understand.
-_SKIP, _HIT, _FREE = 0, 1, 2
+_SKIP, _HIT, _FREE = 0, 1, 2  # beam kinds
 
 
 @njit(cache=True, nogil=True)

@@ -33,8 +33,6 @@ PROGRESS_CHUNK = 64  # scans per kernel call when a progress bar is shown
 _NO_STAMP = np.zeros((0, 0), np.int32)  # the hit kernel lists no touched cells
 _NO_CELLS = np.zeros((0, 2), np.int64)
 
-# --- checked public functions -------------------------------------------------------------
-
 
 def _check_scans(scans):
     source = getattr(scans, "source", "") or "scans"
@@ -101,8 +99,7 @@ def _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_retu
     resolution = _positive("resolution", resolution)
     if bounds is None:
         xmin, ymin, xmax, ymax = scan_bounds(scans, free_on_no_return, max_range_is_no_return)
-        # Snap to multiples of the resolution so grids of one data set line up.
-        # (rounded to 1e-9 m so 0.05 m steps print as -20.4, not -20.400000000000002).
+        # snapped to multiples of the resolution so grids of one data set line up; rounded to 1e-9 m to print cleanly
         xmin = round(math.floor(xmin / resolution) * resolution, 9)
         ymin = round(math.floor(ymin / resolution) * resolution, 9)
     else:
@@ -171,10 +168,7 @@ def _hits(g, progress):
 
 def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_range_is_no_return=True,
                progress=False):
-    """Occupied and empty hit counts per cell, ``[y, x]`` int32 arrays (thesis sec. 3.2).
-
-    The grid's lower-left corner is ``bounds[:2]`` when bounds are given, else the data's padded bounding box
-    (:func:`scan_bounds`) snapped down to multiples of ``resolution`` (the origin :func:`build_grid` reports).
+    """Occupied and empty hit counts per cell, ``[y, x]`` int32 arrays, on :func:`build_grid`'s grid.
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
@@ -189,7 +183,7 @@ def count_hits(scans, resolution, bounds=None, free_on_no_return=False, max_rang
 
 def sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_max, frame_id="map"):
     """A one-scan ScanSet of a laser's geometry at the centre of ``bounds`` (xmin, ymin, xmax, ymax) [m], no readings:
-    what a grid for that sensor is made from before any scan arrives (the online mappers' ``for_sensor``)."""
+    what a grid for that sensor is made from before any scan arrives."""
     try:
         xmin, ymin, xmax, ymax = (float(v) for v in bounds)
     except (TypeError, ValueError):
@@ -204,9 +198,8 @@ def sensor_probe(bounds, angle_min, angle_increment, n_beams, range_min, range_m
 class HitCounter:
     """The hit counts of :func:`count_hits`, filled one scan at a time (online mapping).
 
-    After :meth:`add_scan` of every scan of a recording, in any order, ``occupied`` and
-    ``empty`` equal :func:`count_hits` of it (same grid, same beams, same cells) and
-    :meth:`grid` equals :func:`build_grid` with the arctan model.
+    After :meth:`add_scan` of every scan of a recording, in any order, ``occupied`` and ``empty`` equal
+    :func:`count_hits` of it and :meth:`grid` equals :func:`build_grid` with the arctan model.
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
@@ -249,10 +242,8 @@ class HitCounter:
         return cls.for_scans(probe, resolution, bounds, free_on_no_return, max_range_is_no_return)
 
     def add_scan(self, ranges, laser_pose) -> np.ndarray:
-        """Count one scan's hits (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map).
-
-        Returns the cells whose counts changed, once each, as an (n, 2) array of (x, y).
-        """
+        """Count one scan's hits (``ranges`` [m], REP 117, at ``laser_pose`` (x, y, yaw) in the map); returns the
+        cells whose counts changed, once each, as (n, 2) (x, y)."""
         r = np.asarray(ranges)
         if r.shape != (len(self.angles),) or not np.issubdtype(r.dtype, np.floating):
             raise InputError("ranges", f"expected {len(self.angles)} floating-point readings, got shape {r.shape} "
@@ -303,18 +294,13 @@ def logodds_to_probability(logodds):
 def build_grid(scans, resolution, model="arctan", bounds=None, free_on_no_return=False,
                max_range_is_no_return=True, p_hit=0.7, p_miss=0.4, logodds_limit=5.0,
                progress=False) -> OccupancyGrid:
-    """Occupancy grid from scans with known laser poses (x, y, yaw per scan, in ``scans.frame_id``).
+    """Occupancy grid [y, x] from scans with known laser poses (x, y, yaw per scan, in ``scans.frame_id``).
 
-    ``resolution``: the cell size [m]. ``model``: ``"arctan"``, the thesis's hit-count model (eq. 16), or
-    ``"logodds"``, the log-odds baseline, with ``p_hit`` / ``p_miss`` (P(occupied) given a beam ended in / passed
-    through the cell) and ``l`` clamped to ``[-logodds_limit, logodds_limit]`` after each update. ``bounds`` (xmin,
+    ``resolution``: the cell size [m]. ``model``: ``"arctan"`` or ``"logodds"`` (see the module doc). ``bounds`` (xmin,
     ymin, xmax, ymax) [m]: the area to map, by default the data's bounding box plus ``BOUNDS_PADDING``; beams leaving
-    given bounds are cut at its edge (no occupied hit there). ``free_on_no_return``: the range [m] up to which a
-    no-return beam (+Inf, or range_max when ``max_range_is_no_return``) marks cells free (True: ``range_max``).
-    ``progress``: a tqdm bar.
-
-    The grid's ``probability[y, x]`` is 0.5 where never observed; its origin is the lower-left corner, its
-    ``frame_id`` ``scans.frame_id``, its ``meta`` the model and counts.
+    it are cut at its edge (no occupied hit there). ``free_on_no_return``: the range [m] up to which a no-return beam
+    (+Inf, or range_max when ``max_range_is_no_return``) marks cells free (True: ``range_max``). The grid's origin is
+    its lower-left corner, its ``meta`` the model and counts.
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))

@@ -10,12 +10,10 @@ the closed-form updates under the Jaakkola-Jordan bound (``lam(xi) = (sigmoid(xi
   ``mu_j = sig_j (mu0_j / sig0_j + sum_n (y_n - 1/2) phi_nj)``,
 - ``xi_n^2 = sum_j phi_nj^2 sig_j + (sum_j phi_nj mu_j)^2``, starting from xi = 1,
 
-exactly as the authors' code (ransalu/Bayesian_Hilbert_Maps, ``BHM2D``: diagonal ``sig``, three
-iterations per batch, no bias feature). This is this project's implementation of that update (sparse
-features, numba), not the authors' program. The mean update is the full-covariance formula with the
-precision's diagonal only (the authors' choice); with a single feature it is exact. A query
-returns the probit-approximated predictive ``sigmoid(a / sqrt(1 + pi s2 / 8))`` with
-``a = phi . mu``, ``s2 = phi^2 . sig``: far from every feature it is 0.5.
+exactly as the authors' code (ransalu/Bayesian_Hilbert_Maps, ``BHM2D``: diagonal ``sig``, no bias feature), in
+this project's implementation (sparse features, numba), not the authors' program. The mean update keeps only the
+precision's diagonal (the authors' choice). A query returns the probit-approximated predictive
+``sigmoid(a / sqrt(1 + pi s2 / 8))`` with ``a = phi . mu``, ``s2 = phi^2 . sig``: far from every feature it is 0.5.
 
 Training data per scan: each returned beam's end point (label 1) and free points every ``free_spacing`` metres along
 the beam from the sensor up to one spacing before the end (label 0). Features below ``exp(-CUTOFF^2 / 2)`` (beyond
@@ -42,9 +40,7 @@ from crfmap.grid import OccupancyGrid
 PRIOR_VARIANCE = 10_000.0  # the authors' first prior N(0, 10^4) on every weight
 EM_ITERATIONS = 3  # closed-form rounds per batch (scan), as the authors' code
 CUTOFF = 4.0  # [length scales] features beyond are dropped (exp(-8) = 3e-4 of the peak)
-# Chosen on the Intel log only, by the certainty preset's search rule (a coordinate search by the scan-split Brier
-# score; the record: crfstudy.analysis.peer_search.HILBERT_SEARCH_INTEL, each value with grid values on either
-# side), then fixed for every recording:
+# Chosen on the Intel log only, as the OctoMap peer's constants (crfmap.assess.peers), then fixed for every recording:
 FEATURE_SPACING = 0.075  # [m] between RBF centres
 LENGTH_SCALE = 0.025  # [m] RBF width, gamma = 1 / (2 LENGTH_SCALE^2) = 800 / m^2
 FREE_SPACING = 0.05  # [m] between free points sampled along a beam
@@ -89,8 +85,7 @@ def _lam(xi):
 def _fit_batch(ptr, idx, val, y, mu, sig, n_iter, acc_prec, acc_b, mark, batch, touched, mu0, sig0):  # pragma: no cover
     """The authors' closed-form rounds on one batch; ``mu``, ``sig`` (prior in, posterior out) in place.
 
-    ``mark`` (one int per feature, below ``batch`` on entry) finds the batch's features without sorting;
-    ``touched``, ``mu0``, ``sig0`` are work buffers of one entry per feature.
+    ``mark`` (one int per feature, below ``batch`` on entry) finds the batch's features without sorting.
     """
     n = ptr.size - 1
     m = 0
@@ -201,8 +196,8 @@ class HilbertMap:
 def beam_samples(scans, free_spacing=FREE_SPACING, bounds=None, max_range_is_no_return=True):
     """Per scan, (points [n, 2], labels [n]): returned beams' end points (1) and free points along them (0).
 
-    Readings follow REP 117 like :mod:`crfmap.mapping.builder`; no-return beams give nothing.
-    With ``bounds`` (xmin, ymin, xmax, ymax), points outside are dropped.
+    Readings follow REP 117; no-return beams give nothing. With ``bounds`` (xmin, ymin, xmax, ymax), points outside
+    are dropped.
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[1.0]], np.float32), 0.0, 0.0, 0.1, 5.0, np.zeros((1, 3)), np.zeros(1))

@@ -13,16 +13,12 @@ What OctoMap does with one scan (``OccupancyOcTreeBase::insertPointCloud`` with 
    ``l`` is then clamped to ``[logit(clamp_min), logit(clamp_max)]`` (``updateNodeLogOdds``),
    in float32 like OctoMap's nodes. Never-updated cells stay unknown (P = 0.5).
 
-This is this project's implementation of OctoMap's update, not the OctoMap library: it is checked
-against the real library (OctoMap's C++ through octomap-python, a test extra) on the same rays, cell by
-cell, in ``tests/mapping/test_octomap.py::test_matches_the_octomap_library``.
-
-Defaults are OctoMap's (``AbstractOccupancyOcTree``): hit 0.7, miss 0.4, clamping 0.1192 / 0.971
-(log-odds -2 / +3.5). The ``octomap`` peer row (:mod:`crfmap.assess.peers`) uses constants searched
-on the Intel log instead (:data:`crfmap.assess.peers.OCTOMAP_INTEL`). The octree is only OctoMap's storage: at one fixed resolution its
-leaves are this grid's cells. Readings follow REP 117 as in :mod:`crfmap.mapping.builder`
-(no-returns dropped unless ``free_on_no_return``, which clears up to that range like OctoMap's
-``maxrange``); a beam leaving the grid clears cells up to the edge and marks nothing occupied.
+This is this project's implementation of OctoMap's update, not the OctoMap library: the tests check it against the
+library (through octomap-python) on the same rays, cell by cell. Defaults are OctoMap's; the ``octomap`` peer row
+uses :data:`crfmap.assess.peers.OCTOMAP_INTEL`. The octree is only OctoMap's storage: at one fixed resolution its
+leaves are this grid's cells. Readings follow REP 117 as in :mod:`crfmap.mapping.builder` (no-returns dropped unless
+``free_on_no_return``, which clears up to that range like OctoMap's ``maxrange``); a beam leaving the grid clears
+cells up to the edge and marks nothing occupied.
 
 >>> from crfmap.recording import ScanSet
 >>> s = ScanSet(np.array([[0.36]], np.float32), 0.0, 0.0, 0.1, 5.0, np.array([[0.05, 0.05, 0.0]]), np.zeros(1))
@@ -145,29 +141,31 @@ def _logit(p, name):
     return math.log(float(p) / (1.0 - float(p)))
 
 
-def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, clamp_min=CLAMP_MIN,
-                 clamp_max=CLAMP_MAX, free_on_no_return=False, max_range_is_no_return=True) -> OccupancyGrid:
-    """Occupancy grid of OctoMap's clamped log-odds update, one update per cell and scan.
-
-    Same grid as :func:`crfmap.mapping.build_grid` for the same ``scans``, ``resolution`` and
-    ``bounds``; ``probability`` is ``sigmoid(l)`` where a cell was updated, 0.5 elsewhere.
-    """
+def _logodds_params(p_hit, p_miss, clamp_min, clamp_max) -> tuple:
+    """The float32 log-odds (hit, miss, lower clamp, upper clamp) of the four probabilities, checked."""
     l_hit, l_miss = _logit(p_hit, "p_hit"), _logit(p_miss, "p_miss")
     l_min, l_max = _logit(clamp_min, "clamp_min"), _logit(clamp_max, "clamp_max")
     if not (l_hit > 0 > l_miss):
         raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
     if not (l_min < 0 < l_max):
         raise InputError("clamp_min/clamp_max", f"need clamp_min < 0.5 < clamp_max, got {clamp_min!r} and {clamp_max!r}")
+    return tuple(np.float32(v) for v in (l_hit, l_miss, l_min, l_max))
+
+
+def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, clamp_min=CLAMP_MIN,
+                 clamp_max=CLAMP_MAX, free_on_no_return=False, max_range_is_no_return=True) -> OccupancyGrid:
+    """Occupancy grid of OctoMap's clamped log-odds update on :func:`crfmap.mapping.build_grid`'s grid: ``sigmoid(l)``
+    where a cell was updated, 0.5 elsewhere."""
+    params = _logodds_params(p_hit, p_miss, clamp_min, clamp_max)
     g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
     shape = (g["height"], g["width"])
     logodds = np.zeros(shape, np.float32)
     hit_stamp = np.full(shape, -1, np.int64)
     miss_stamp = np.full(shape, -1, np.int64)
     buf = np.empty((2 * (g["width"] + g["height"]) + 4, 2), np.int64)
-    f32 = np.float32
     used = _octomap_update(g["ranges"], g["angles"], g["poses"], g["range_min"], g["range_max"], g["max_is_no_return"],
-                           g["free_range"], g["origin_x"], g["origin_y"], g["resolution"], f32(l_hit), f32(l_miss),
-                           f32(l_min), f32(l_max), logodds, hit_stamp, miss_stamp, 0, buf)
+                           g["free_range"], g["origin_x"], g["origin_y"], g["resolution"], *params, logodds, hit_stamp,
+                           miss_stamp, 0, buf)
     probability = 1.0 / (1.0 + np.exp(-logodds.astype(np.float64)))
     probability[(hit_stamp < 0) & (miss_stamp < 0)] = UNKNOWN
     meta = {"model": "octomap", "scans": len(g["ranges"]), "beams_used": int(used), "p_hit": float(p_hit),
@@ -177,10 +175,8 @@ def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, cla
 
 
 class OctoMapUpdater:
-    """OctoMap's update one scan at a time (a robot mapping as it drives): the state of :func:`octomap_grid`.
-
-    After :meth:`add_scan` of every scan of a recording, in order, :meth:`grid` equals :func:`octomap_grid` of it on
-    the same grid with the same parameters (each scan updates a cell at most once, as there).
+    """OctoMap's update one scan at a time (a robot mapping as it drives): after :meth:`add_scan` of every scan of a
+    recording, in order, :meth:`grid` equals :func:`octomap_grid` of it on the same grid with the same parameters.
 
     >>> up = OctoMapUpdater.for_sensor((0, 0, 0.5, 0.1), 0.1, 0.0, 0.1, 1, 0.05, 5.0)
     >>> up.add_scan(np.array([0.36], np.float32), (0.05, 0.05, 0.0))
@@ -189,20 +185,12 @@ class OctoMapUpdater:
     """
 
     def __init__(self, geometry, p_hit=P_HIT, p_miss=P_MISS, clamp_min=CLAMP_MIN, clamp_max=CLAMP_MAX):
-        l_hit, l_miss = _logit(p_hit, "p_hit"), _logit(p_miss, "p_miss")
-        l_min, l_max = _logit(clamp_min, "clamp_min"), _logit(clamp_max, "clamp_max")
-        if not (l_hit > 0 > l_miss):
-            raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
-        if not (l_min < 0 < l_max):
-            raise InputError("clamp_min/clamp_max", f"need clamp_min < 0.5 < clamp_max, got {clamp_min!r} and "
-                                                    f"{clamp_max!r}")
+        self._logodds_params = _logodds_params(p_hit, p_miss, clamp_min, clamp_max)
         g = dict(geometry)
         self.width, self.height, self.resolution = int(g["width"]), int(g["height"]), float(g["resolution"])
         self.origin = (float(g["origin_x"]), float(g["origin_y"]), 0.0)
         self.angles = np.asarray(g["angles"], np.float64)
         self._sensor = (g["range_min"], g["range_max"], g["max_is_no_return"], g["free_range"])
-        f32 = np.float32
-        self._logodds_params = (f32(l_hit), f32(l_miss), f32(l_min), f32(l_max))
         self.logodds = np.zeros((self.height, self.width), np.float32)
         self._hit_stamp = np.full((self.height, self.width), -1, np.int64)
         self._miss_stamp = np.full((self.height, self.width), -1, np.int64)

@@ -1,18 +1,15 @@
 """Online mapping: integrate laser scans one by one, keep the CRF's beliefs fresh around the robot.
 
 Thesis sec. 3.4.4 bounds message passing to a disc around the robot so LBP can run while mapping.
-:class:`OnlineMapper` keeps the hit counts of the arctan grid (thesis eq. 16) and the LBP messages between scans.
+:class:`OnlineMapper` keeps the hit counts of the arctan grid and the LBP messages between scans.
 :meth:`OnlineMapper.integrate` adds one scan's hits (the grid builder's own ray casting), refreshes the observation
 of every cell a beam passed, and runs checkerboard LBP on the cells within ``radius`` of the laser, warm-started
 from the messages the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to convergence,
-which gives the preset's offline refinement of the same scans (``preset.refine(hits=..., passes=...)`` on
-:func:`crfmap.mapping.builder.count_hits`) when LBP has one fixed point.
+which gives the preset's offline refinement of the same scans when LBP has one fixed point.
 
-The CRF is a preset (:mod:`crfmap.crf.presets`), as for ``crfmap infer``: by default
-:data:`~crfmap.crf.presets.DEFAULT_PRESET` (certainty-scaled observations, a coupling below critical, LBP only near
-observations), so walls seen many times stay; ``preset="thesis"`` is the thesis's table [[10, 1], [1, 10]] over the
-whole grid. Hard evidence never arises here: every preset's observation lies strictly inside (0, 1), and no link
-table (no all-zero row) makes such a cell certain (:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
+The CRF is a preset (:mod:`crfmap.crf.presets`), as for ``crfmap infer``. Hard evidence never arises here: every
+preset's observation lies strictly inside (0, 1), and no link table (no all-zero row) makes such a cell certain
+(:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet
@@ -48,9 +45,9 @@ PRESET_MARGIN = "preset"  # margin= this: the preset's own margin (None would me
 
 
 def mapper_preset(preset=None, hidden=None, link=None, pairing=None, margin=PRESET_MARGIN) -> Preset:
-    """The preset an :class:`OnlineMapper` runs: named or given, or a custom one of ``hidden``/``link``/``pairing``.
-
-    ``margin`` other than :data:`PRESET_MARGIN` replaces the preset's margin (None: every cell sends).
+    """The preset an :class:`OnlineMapper` runs: named or given (None: :data:`~crfmap.crf.presets.DEFAULT_PRESET`),
+    or a custom one of ``hidden``/``link``/``pairing``. ``margin`` other than :data:`PRESET_MARGIN` replaces the
+    preset's margin [cells] (None: every cell sends).
 
     >>> mapper_preset().name == DEFAULT_PRESET, mapper_preset("thesis", margin=3).margin
     (True, 3)
@@ -91,19 +88,15 @@ class OnlineMapper:
     """An arctan occupancy grid built scan by scan, with bounded LBP around the robot.
 
     ``hits`` (:class:`crfmap.mapping.builder.HitCounter`): the grid, the laser's geometry and the hit counts (fresh,
-    or holding earlier scans); :meth:`for_scans` and :meth:`for_sensor` make one. ``preset``: the CRF, its
-    observation model, hidden and link tables, pairing, margin and temperature (None:
-    :data:`~crfmap.crf.presets.DEFAULT_PRESET`; a name from :data:`~crfmap.crf.presets.PRESETS`, e.g. "thesis");
-    ``hidden``, ``link``, ``pairing`` (:mod:`crfmap.crf.model.potentials`) make a custom preset instead
-    (:func:`~crfmap.crf.presets.custom_preset`: the arctan grid's P through ``link``). LBP runs on the cells whose
-    centres lie within ``radius`` [m] of the laser, for at most ``max_iter`` iterations per scan (fewer once the
-    largest message change falls below ``tol``).
+    or holding earlier scans); :meth:`for_scans` and :meth:`for_sensor` make one. ``preset``, ``hidden``, ``link``,
+    ``pairing``, ``margin``: the CRF (:func:`mapper_preset`). LBP runs on the cells whose centres lie within
+    ``radius`` [m] of the laser, for at most ``max_iter`` iterations per scan (fewer once the largest message change
+    falls below ``tol``).
 
-    ``margin`` [cells]: the preset's (``"preset"``, the default) or another: only cells within ``margin`` cells
-    (Chebyshev distance) of a cell some beam has observed send messages, as with ``region=near_known(grid, margin)``
-    in :func:`crfmap.crf.inference.lbp.infer`: gaps and occlusions up to ``margin`` cells deep are filled and the
-    unexplored rest stays unknown (exactly 0.5, as the preset's offline refinement leaves it). None: every cell in
-    the disc sends (the thesis's model; with a strong coupling it fills unexplored space with its border's state).
+    With a margin only cells within ``margin`` cells (Chebyshev) of an observed cell send messages, as with
+    ``region=near_known(grid, margin)`` in :func:`crfmap.crf.inference.lbp.infer`: gaps up to ``margin`` cells deep
+    are filled and the unexplored rest stays 0.5. None: every cell in the disc sends (the thesis's model; with a
+    strong coupling it fills unexplored space with its border's state).
     """
 
     def __init__(self, hits: builder.HitCounter, preset=None, *, hidden=None, link=None, pairing=None,
@@ -131,11 +124,7 @@ class OnlineMapper:
     @classmethod
     def for_scans(cls, scans: ScanSet, resolution, bounds=None, free_on_no_return=False,
                   max_range_is_no_return=True, **options) -> "OnlineMapper":
-        """A mapper for a recording's sensor on the grid :func:`crfmap.mapping.builder.build_grid` would make.
-
-        ``bounds`` None takes the data's bounding box as the builder does, so the final
-        :meth:`observations` equal ``build_grid(scans, resolution)`` cell for cell.
-        """
+        """A mapper for a recording's sensor on the grid :func:`crfmap.mapping.builder.build_grid` would make."""
         hits = builder.HitCounter.for_scans(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
         return cls(hits, **options)
 
@@ -196,10 +185,8 @@ class OnlineMapper:
         return seconds
 
     def finish(self, tol=None, max_iter=None, threads=None) -> LBPResult:
-        """LBP on the whole grid from the current messages until ``tol``: the preset's offline refinement.
-
-        ``tol`` and ``max_iter`` default to the preset's own (what :meth:`Preset.refine` runs to).
-        """
+        """LBP on the whole grid from the current messages until ``tol`` (by default the preset's, as
+        :meth:`Preset.refine`): the preset's offline refinement."""
         import numba
 
         tol = self.preset.tol if tol is None else float(tol)
@@ -232,22 +219,17 @@ class OnlineMapper:
         return near_cells(observed, self.margin)
 
     def beliefs(self) -> OccupancyGrid:
-        """The current LBP beliefs P(occupied) of every cell, as the preset's refinement reports them.
-
-        Outside the preset's :meth:`region` a cell keeps its observation (0.5: never observed), a preset's
-        evidence gate (:mod:`crfmap.crf.model.gating`) gives never-observed cells its prior, and a preset
-        temperature other than 1 tempers the whole map, as :meth:`crfmap.crf.presets.Preset.refine` does.
-        """
+        """The current LBP beliefs P(occupied) of every cell, as :meth:`crfmap.crf.presets.Preset.refine` reports them
+        (0.5 outside :meth:`region`, then the preset's gate and temperature)."""
         return self._refined()[0]
 
     def nav2_map(self) -> OccupancyGrid:
-        """The map to hand nav2: the beliefs moved by the preset's evidence gate into the class each cell's own counts
-        allow, as ``Preset.refine(...).nav2_map``; the beliefs themselves without a gate."""
+        """The map to hand nav2, as ``Preset.refine(...).nav2_map`` (the beliefs, unless the preset has a gate)."""
         beliefs, decided = self._refined()
         return beliefs if decided is None else decided
 
     def _refined(self) -> tuple:
-        """(beliefs, map for nav2 or None): the preset's ending of a refinement (:meth:`Preset.finish`) on LBP's beliefs."""
+        """(beliefs, map for nav2 or None): :meth:`Preset.finish` on LBP's beliefs."""
         probability = np.clip(self.lbp.beliefs(), 0.0, 1.0)
         if self.margin is not None:  # cells next to a sender receive messages but are outside the refinement
             probability[~self.region()] = 0.5

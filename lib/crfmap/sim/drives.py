@@ -1,9 +1,8 @@
 """How :func:`crfmap.sim.simulator.simulate` drives the robot: one small settings object per mode.
 
-Each drive holds only the settings that apply to it, so a setting cannot be passed to a mode that would ignore it:
-``Explore(stride=4)``, ``Look(turns=2)``, ``Waypoints(waypoints=..., scan_period=1.0)``. What every drive shares
-(start pose, ``dt``, speed limits) stays a keyword of ``simulate``. A mode's name (``"explore"``, ``"look"``,
-``"waypoints"``) means its drive with the defaults.
+Each drive holds only the settings that apply to it, so a setting cannot be passed to a mode that would ignore it;
+what every drive shares (start pose, ``dt``, speed limits) stays a keyword of ``simulate``. A mode's name
+(``"explore"``, ``"look"``, ``"waypoints"``) means its drive with the defaults.
 
 >>> drive_for("look")
 Look(turns=1)
@@ -27,14 +26,10 @@ def _radius(value):
 
 @dataclass(frozen=True)
 class Explore:
-    """Visit every reachable cell and look around (:func:`~crfmap.sim.motion.explore_reachable`).
+    """Visit every reachable cell and look around (:func:`~crfmap.sim.motion.explore_reachable`)."""
 
-    stride : int, look around only at cells farther than ``stride - 1`` cells from the last look-around
-    robot_radius : float [m] or None (the scene's)
-    """
-
-    stride: int = 1
-    robot_radius: float | None = None
+    stride: int = 1  # look around only at cells farther than stride - 1 cells from the last look-around
+    robot_radius: float | None = None  # [m], None: the scene's
     mode: ClassVar[str] = "explore"
 
     def __post_init__(self):
@@ -63,16 +58,11 @@ class Look:
 
 @dataclass(frozen=True)
 class Waypoints:
-    """Drive through waypoints, scanning every ``scan_period`` s (:func:`~crfmap.sim.motion.follow_waypoints`).
+    """Drive through waypoints, scanning every ``scan_period`` s (:func:`~crfmap.sim.motion.follow_waypoints`)."""
 
-    waypoints : (k, 2) x, y [m] or None (the scene's); checked when the robot drives
-    robot_radius : float [m] or None (the scene's)
-    scan_period : float [s]
-    """
-
-    waypoints: object = None
-    robot_radius: float | None = None
-    scan_period: float = 0.2
+    waypoints: object = None  # (k, 2) x, y [m], None: the scene's; checked when the robot drives
+    robot_radius: float | None = None  # [m], None: the scene's
+    scan_period: float = 0.2  # [s]
     mode: ClassVar[str] = "waypoints"
 
     def __post_init__(self):

@@ -15,11 +15,8 @@ LEGACY_NO_RETURN = -1.0  # the thesis's "nothing within range" code (sec. 3.1.1)
 
 @dataclass
 class Laser:
-    """A planar laser scanner, as a sensor_msgs/LaserScan describes it.
-
-    Beam i points at ``angle_min + i * angle_increment`` (CCW, laser frame) for
-    ``angle_min <= angle <= angle_max``. ``no_return`` is what a beam that hits nothing
-    reports: ``inf`` (REP 117) or :data:`LEGACY_NO_RETURN` (-1, the thesis).
+    """A planar laser scanner: beam i points at ``angle_min + i * angle_increment`` (CCW, laser frame) up to
+    ``angle_max``. ``no_return``: what a beam that hits nothing reports, ``inf`` (REP 117) or :data:`LEGACY_NO_RETURN`.
 
     >>> Laser.with_fov(180, 5).angles.round(3).tolist()
     [-1.571, -0.785, 0.0, 0.785, 1.571]

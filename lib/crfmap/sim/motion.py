@@ -6,17 +6,9 @@ straight path would put the robot on an occupied cell (or too near one for its r
 returns a :class:`Motion`: the commands, the executed (distance, turn) steps, the true poses and the steps at which
 the laser scans. :func:`crfmap.sim.simulator.simulate` turns it into odometry and scans.
 
-Drives (the modes of :func:`crfmap.sim.simulator.simulate`):
-
-- ``"explore"`` (:func:`explore_reachable`): drive cell to cell along a depth-first tour of every reachable cell and
-  look around (a full turn in place, or one scan for a 360 deg laser) at each newly visited cell, or at fewer with
-  ``stride``; the thesis's "the robot has moved to every cell ... it can physically access".
-- ``"look"`` (:func:`look_around`): stand at the start and turn in place (Fig. 28).
-- ``"waypoints"`` (:func:`follow_waypoints`): plan a grid path through the waypoints and
-  drive it with a turn-then-go controller on the true pose, scanning at a fixed rate.
-
-A drive needs of the laser only how many scans cover a full turn
-(:meth:`crfmap.sim.simulator.Laser.headings_per_turn`).
+The drives: :func:`explore_reachable` (the thesis's "the robot has moved to every cell ... it can physically
+access"), :func:`look_around` (Fig. 28) and :func:`follow_waypoints`. A drive needs of the laser only how many scans
+cover a full turn (:meth:`crfmap.sim.laser.Laser.headings_per_turn`).
 
 >>> from crfmap.world.scenes import enclosed_boxes
 >>> from crfmap.sim.laser import Laser
@@ -71,17 +63,12 @@ def _integrate(x, y, yaw, moves):
 
 @dataclass
 class Motion:
-    """A driven run: the commands, what the robot actually did, and when it scanned.
+    """A driven run: the commands, what the robot actually did, and when it scanned."""
 
-    ``poses[k]`` is the true base_link pose in map after ``k`` steps of ``dt`` seconds;
-    ``moves[k]`` = (distance [m], turn [rad]) executed in step k; ``commands[k]`` = the
-    Twist (v [m/s], w [rad/s]) sent for step k; ``scan_at`` = indices into ``poses``.
-    """
-
-    poses: np.ndarray  # (n + 1, 3)
-    moves: np.ndarray  # (n, 2)
-    commands: np.ndarray  # (n, 2)
-    scan_at: np.ndarray  # (m,) int
+    poses: np.ndarray  # (n + 1, 3) true base_link pose in map after k steps
+    moves: np.ndarray  # (n, 2) (distance [m], turn [rad]) executed in step k
+    commands: np.ndarray  # (n, 2) the Twist (v [m/s], w [rad/s]) sent for step k
+    scan_at: np.ndarray  # (m,) int, indices into poses
     dt: float  # [s]
 
     def __len__(self):
@@ -133,9 +120,8 @@ def explore_reachable(scene: Scene, laser: Laser, *, start=None, robot_radius=No
                       linear_speed=0.5, angular_speed=1.5) -> Motion:
     """Drive through every reachable cell (depth-first, cell centre to cell centre) and look around.
 
-    The robot first moves to the centre of its start cell. At each newly visited cell not
-    within ``stride - 1`` cells (Chebyshev) of an earlier look-around it scans all around
-    (:meth:`Laser.headings_per_turn` scans); ``stride = 1`` looks around at every cell.
+    The robot first moves to the centre of its start cell. At each newly visited cell not within ``stride - 1`` cells
+    (Chebyshev) of an earlier look-around it scans all around (a full turn, or one scan for a 360 deg laser).
 
     >>> from crfmap.world.scenes import enclosed_boxes
     >>> from crfmap.sim.laser import Laser
@@ -196,10 +182,8 @@ def look_around(scene: Scene, laser: Laser, *, start=None, dt=0.1, angular_speed
 # --- waypoints ----------------------------------------------------------------------------
 @njit(cache=True)
 def _step(x, y, yaw, v, w, dt, free, ox, oy, c, s, res):
-    """One step of the robot: turn ``w*dt``, translate ``v*dt`` unless that runs into a non-free cell.
-
-    (ox, oy) is the grid origin, (c, s) the cosine and sine of its yaw, ``res`` its cell size.
-    """
+    """One step: turn ``w*dt``, translate ``v*dt`` unless that runs into a non-free cell of the grid at (ox, oy) with
+    yaw cosine / sine (c, s) and cell size ``res``."""
     d = v * dt
     a = w * dt
     mid = yaw + 0.5 * a
@@ -217,10 +201,9 @@ def follow_waypoints(scene: Scene, laser: Laser, waypoints=None, *, start=None, 
                      linear_speed=0.5, angular_speed=1.5, scan_period=0.2, max_steps=1_000_000) -> Motion:
     """Drive through ``waypoints`` (x, y) [m] in order, scanning every ``scan_period`` seconds.
 
-    Between waypoints the robot follows the shortest grid path (8-connected, footprint
-    respected), shortened to straight free segments. The controller sees the true pose:
-    it turns in place towards the next point when off by more than ``ALIGNED`` rad, else drives
-    at up to ``linear_speed`` while steering (``w = heading error / dt``, clipped).
+    Between waypoints the robot follows the shortest grid path (8-connected, footprint respected), shortened to
+    straight free segments. The controller sees the true pose: it turns in place towards the next point when off by
+    more than ``ALIGNED`` rad, else drives at up to ``linear_speed`` while steering (``w = heading error / dt``).
 
     >>> from crfmap.world.scenes import office_floor
     >>> from crfmap.sim.laser import Laser

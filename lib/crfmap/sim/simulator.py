@@ -9,16 +9,10 @@ Range noise is the thesis's ``d +- C``: ``d + s * c`` with ``s`` a random sign a
 (optionally plus Gaussian noise), applied to returns only and floored at 0; a noisy value may leave ``[range_min,
 range_max]``, and readers discard it then, as REP 117 asks.
 
-Motion (:mod:`crfmap.sim.motion`). The robot follows Twist commands at a fixed ``dt``; a step that would run into a
-wall does not translate. Odometry integrates what the wheels report: every executed translation ``d`` reads ``d +-
-C_lin`` and every executed turn ``a`` reads ``a +- C_yaw`` (the thesis's noise "at each interval of movement", Fig.
-16); wheels that do not turn add no error. Odometry starts at (0, 0, 0) in ``odom``; ``map -> odom`` is the start
-pose (``recording.meta["map_to_odom"]``).
-
-Drives (:mod:`crfmap.sim.drives`, the ``drive`` of :func:`simulate`): :class:`Explore` (visit every reachable cell
-and look around), :class:`Look` (turn in place at the start, Fig. 28) and :class:`Waypoints` (drive through
-waypoints, scanning at a fixed rate); each holds only its own settings, and a mode name (``"explore"``, ``"look"``,
-``"waypoints"``) means its drive with the defaults.
+Motion: a drive (:mod:`crfmap.sim.drives`) moves the robot (:mod:`crfmap.sim.motion`). Odometry integrates what the
+wheels report: every executed translation ``d`` reads ``d +- C_lin`` and every executed turn ``a`` reads ``a +-
+C_yaw`` (the thesis's noise "at each interval of movement", Fig. 16); wheels that do not turn add no error. Odometry
+starts at (0, 0, 0) in ``odom``; ``map -> odom`` is the start pose (``recording.meta["map_to_odom"]``).
 
 >>> from crfmap.world.scenes import enclosed_boxes
 >>> rec = simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), "look", progress=False)
@@ -53,10 +47,8 @@ PROGRESS_BEAMS = 2_000_000  # beams in a run above which simulate() shows a prog
 # --- ray casting --------------------------------------------------------------------------
 @njit(cache=True)
 def _cast_scans(occupied, lx, ly, lyaw, angles, reach, out):
-    """Distances [cells] from laser positions (lx, ly) [cells, continuous] to the first occupied cell's centre.
-
-    ``out[i, j]`` = inf where beam j of scan i meets nothing before ``reach`` cells.
-    """
+    """Distances [cells] from laser positions (lx, ly) [cells, continuous] to the first occupied cell's centre
+    (``out[i, j]`` = inf where beam j of scan i meets nothing before ``reach`` cells)."""
     for i in range(lx.shape[0]):
         cx = int(math.floor(lx[i]))
         cy = int(math.floor(ly[i]))
@@ -112,8 +104,7 @@ def cast_rays(truth: OccupancyGrid, laser: Laser, laser_poses, progress=False) -
 def add_range_noise(ranges, bound=0.0, sigma=0.0, rng=None) -> np.ndarray:
     """The thesis's ``d +- C`` on every finite range: ``d + s * c``, ``s`` = +-1, ``c`` ~ U[0, bound], plus N(0, sigma).
 
-    Random numbers are drawn for every beam (returns or not) so the stream does not
-    depend on the scene. Results are floored at 0.
+    Random numbers are drawn for every beam (returns or not) so the stream does not depend on the scene.
 
     >>> r = add_range_noise(np.array([[1.0, np.inf]]), 0.1, rng=np.random.default_rng(0))
     >>> bool(abs(r[0, 0] - 1.0) <= 0.1), float(r[0, 1])
@@ -141,9 +132,7 @@ def _odometry_noise(value):
     return c, 0.0
 
 
-START_TIME = 1_700_000_000.0  # [s] 2023-11-14 22:13:20 UTC: the first stamp of a simulated run. ROS
-# users expect wall-clock-like stamps, and a stamp of 0 means "no time" to ROS (tf2: latest transform);
-# fixed, so that reruns are identical.
+START_TIME = 1_700_000_000.0  # [s] 2023-11-14 UTC, fixed: wall-clock-like stamps, as ROS expects (0 means "no time")
 
 
 def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, range_noise=0.0, range_sigma=0.0,
@@ -151,20 +140,14 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
              angular_speed=1.5, t0=START_TIME, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
-    - ``laser``: default ``Laser()``: 360 beams over 360 deg, 0.05-5 m.
-    - ``drive``: :class:`Explore`, :class:`Look`, :class:`Waypoints`, or a mode name ``"explore"``, ``"look"``,
-      ``"waypoints"`` meaning that drive with its defaults (default: ``scene.default_mode``). Mode-specific settings
-      (``stride``, ``turns``, ``waypoints``, ``scan_period``, ``robot_radius``) belong to the drive; given here they
-      are an InputError.
-    - ``seed``: all noise comes from ``np.random.default_rng(seed)``. ``range_noise`` C [m]: ranges read ``d +- c``,
-      ``c`` ~ U[0, C]; ``range_sigma`` [m]: extra Gaussian range noise. ``odometry_noise``: C [m] or (C_lin [m],
-      C_yaw [rad]) per step: odometry reads each executed translation ``+- c`` (and each executed turn ``+- c_yaw``);
-      0 = perfect odometry.
+    - ``drive``: a drive of :mod:`crfmap.sim.drives` or a mode name (default: ``scene.default_mode``). Settings of a
+      drive (``stride``, ``turns``, ``waypoints``, ``scan_period``, ``robot_radius``) given here are an InputError.
+    - ``seed``: all noise comes from ``np.random.default_rng(seed)``. ``range_noise`` C [m] and ``range_sigma`` [m]:
+      see the module doc. ``odometry_noise``: C [m] or (C_lin [m], C_yaw [rad]) per step; 0 = perfect odometry.
     - ``laser_mount``: (x, y, yaw) of the laser in base_link; ``start``: (x, y, yaw) [m, rad] or None
       (``scene.start``).
     - ``dt`` [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which only turns) and
-      ``angular_speed`` [rad/s] limits. ``t0`` [s]: the stamp of the first pose (default :data:`START_TIME`; a ROS bag
-      refuses 0). ``progress``: a progress bar for the ray casting.
+      ``angular_speed`` [rad/s] limits. ``t0`` [s]: the stamp of the first pose (a ROS bag refuses 0).
 
     The recording holds ``scans`` (true laser poses in map), ``odometry`` (base_link in odom, noisy, twists =
     measured), ``true_poses`` (base_link in map), ``cmd_vel`` (twists = commanded), ``laser_mount``,

@@ -1,8 +1,4 @@
-"""A procedurally generated office floor: rooms, doors and desks along corridors, any size.
-
-The thesis scenes (:mod:`crfmap.world.scenes`) are small rooms; this one is a floor plan a mobile robot would map,
-for runs at realistic scale. Everything random comes from ``seed``; the waypoints visit the centres of the rooms a
-robot of ``robot_radius`` can reach from the start.
+"""A procedurally generated office floor, any size: a floor plan a mobile robot would map, beside the thesis's rooms.
 
 >>> s = office_floor(8.0, 6.0, 0.1, seed=0)
 >>> s.name, s.default_mode, s.truth.shape
@@ -46,8 +42,8 @@ def office_floor(width_m=20.0, height_m=15.0, resolution=0.05, seed=0, robot_rad
     The robot starts where the first corridor meets the left corridor, facing +x; the waypoints visit every room
     centre, corridor by corridor (``default_mode="waypoints"``).
 
-    ``width_m`` x ``height_m`` [m]: at least about 6 m x 5 m; ``resolution`` [m/cell]; ``seed``: the layout's random
-    seed; ``robot_radius`` [m]: to check that every room can be reached.
+    ``width_m`` x ``height_m`` [m]: at least about 6 m x 5 m. Everything random comes from ``seed``; the waypoints
+    skip rooms a robot of ``robot_radius`` [m] cannot reach.
 
     >>> s = office_floor(12.0, 10.0, 0.1, seed=3)
     >>> s.truth.shape, len(s.waypoints) >= 2

@@ -41,8 +41,7 @@ def pose_cell(grid: OccupancyGrid, pose) -> tuple:
 def footprint_offsets(robot_radius, resolution) -> np.ndarray:
     """Offsets (dx, dy) [cells] of the cells a disc of ``robot_radius`` [m] centred in cell (0, 0) overlaps.
 
-    A cell at offset (dx, dy) is overlapped when the distance from the disc's centre to the
-    nearest point of that cell's square is below the radius. (0, 0) is always included.
+    Overlapped: the nearest point of the cell's square is nearer than the radius. (0, 0) is always included.
 
     >>> footprint_offsets(0.0, 0.1).tolist()
     [[0, 0]]
@@ -59,9 +58,7 @@ def footprint_offsets(robot_radius, resolution) -> np.ndarray:
 
 
 def traversable(truth, robot_radius=0.0) -> np.ndarray:
-    """Boolean [y, x] mask of cells where a disc robot of ``robot_radius`` [m] fits (touches no occupied cell).
-
-    Occupied means P > 0.5; outside the grid counts as occupied (the robot stays on the map).
+    """Boolean [y, x] mask of cells where a disc robot of ``robot_radius`` [m] fits (see the module doc).
 
     >>> occ = np.zeros((7, 7)); occ[3, 3] = 1
     >>> int(traversable(OccupancyGrid(occ, 0.1), 0.06).sum())  # not: the border ring, the wall, its 4 neighbours
@@ -111,13 +108,8 @@ def _flood_fill(free, sx, sy):
 
 
 def reachable(truth, start, robot_radius=0.0) -> np.ndarray:
-    """Boolean [y, x] mask of the cells a disc robot can reach from ``start`` by moving between side neighbours.
-
-    A cell is traversable when the robot (a disc of ``robot_radius`` metres centred in the cell) overlaps no
-    occupied cell (:func:`traversable`); moves go to the 4 side neighbours, so the robot never slips through a
-    diagonal gap. Cells inside enclosed boxes are not reachable.
-
-    ``truth``: an OccupancyGrid (or Scene); ``start``: (x [m], y [m][, yaw]) in the grid's frame; ``robot_radius`` [m].
+    """Boolean [y, x] mask of the cells a disc robot can reach from ``start`` (x [m], y [m][, yaw]) by moving between
+    side neighbours through :func:`traversable` cells.
 
     >>> from crfmap.world.scenes import enclosed_boxes
     >>> s = enclosed_boxes("train")

@@ -1,8 +1,4 @@
-"""The :class:`Scene` type: a ground-truth grid and where the robot starts in it.
-
-Kept apart from :mod:`crfmap.world.scenes` (the thesis's scenes) and :mod:`crfmap.world.office`
-(procedural floors) so that both build scenes without importing each other.
-"""
+"""The :class:`Scene` type, apart from the modules that build scenes so that they need not import each other."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -17,12 +13,7 @@ MODES = ("explore", "look", "waypoints")  # how a scene is scanned (crfmap.sim.s
 
 @dataclass
 class Scene:
-    """A ground-truth grid and where the robot starts in it.
-
-    ``default_mode`` says how the thesis scanned such a scene (see :func:`crfmap.sim.simulator.simulate`):
-    ``"look"`` = stand at the start and turn in place, ``"explore"`` = visit every reachable cell, ``"waypoints"`` =
-    drive through ``waypoints``.
-    """
+    """A ground-truth grid and where the robot starts in it; ``default_mode``: how the thesis scanned such a scene."""
 
     name: str
     truth: OccupancyGrid  # P(occupied) 0.0 / 1.0

@@ -1,25 +1,13 @@
 """Ground-truth scenes for the experiments of thesis sec. 4.1: the grid and where the robot starts.
 
-A scene is a 0/1 :class:`~crfmap.grid.OccupancyGrid` (P(occupied) 1.0 for walls, 0.0 for
-free space, nothing unknown) plus a start pose of the robot in a free cell it can move
-from. Layouts are drawn in cell coordinates with ``x`` to the right and ``y`` up (row 0 is
-the lowest ``y``, as in the grid); "upper left" means small ``x``, large ``y``.
+A scene (:class:`~crfmap.world.scene.Scene`) is a 0/1 grid, nothing unknown, plus a start pose of the robot in a
+free cell. Layouts are drawn in cell coordinates with ``x`` to the right and ``y`` up (row 0 is the lowest ``y``);
+"upper left" means small ``x``, large ``y``. The thesis scenes are :data:`THESIS_SIZE` cells square at
+:data:`THESIS_RESOLUTION` by default (``resolution=1.0``: cell units, as the thesis); its robot is a point.
 
-The thesis scenes are 40 x 40 cells of ``resolution = 0.1  # [m]`` (a 4 m x 4 m room) by
-default; pass ``resolution=1.0`` to work in cell units as the thesis did. The robot of
-the thesis is a point that occupies one cell (``robot_radius = 0``).
-
-Scenes, by name (:data:`SCENES`, :func:`make_scene`):
-
-- ``x``: the 32 x 32 "X" of the UGM toolbox's denoising demo (thesis Fig. 20), stroke occupied.
-- ``occluded-train`` / ``occluded-test``: walls partly hidden behind small foreground
-  walls, robot upper left (Fig. 27 / Fig. 32).
-- ``enclosed-train`` / ``enclosed-test``: a room with filled boxes the robot cannot enter (Fig. 36 / Fig. 37);
-  ``hollow-train`` / ``hollow-test``: the same with unfilled (enclosed, empty-centred) boxes (Fig. 40).
-- ``office``: a procedurally generated floor of rooms, doors and corridors, any size (:mod:`crfmap.world.office`).
-
-Where a robot can go in a scene (``traversable``, ``reachable``, ...) is
-:mod:`crfmap.world.reachability`; the :class:`~crfmap.world.scene.Scene` itself is :mod:`crfmap.world.scene`.
+Scenes, by name (:data:`SCENES`, :func:`make_scene`): ``x`` (:func:`x_image`), ``occluded-train`` /
+``occluded-test`` (:func:`occluded_walls`), ``enclosed-train`` / ``enclosed-test`` and ``hollow-train`` /
+``hollow-test`` (:func:`enclosed_boxes`), ``office`` (:func:`crfmap.world.office.office_floor`).
 
 >>> scene = occluded_walls("train")
 >>> scene.truth.shape, scene.truth.resolution
@@ -29,6 +17,7 @@ from __future__ import annotations
 
 import inspect
 import math
+from functools import partial
 
 import numpy as np
 
@@ -107,10 +96,9 @@ def _resize_nearest(img, h, w):
 def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
     """The "X" denoising image (thesis Fig. 20) as a 0/1 grid: the X stroke is occupied (1).
 
-    Read from ``images/ugm_X_32x32.csv`` under the data folder (UGM's ``X.mat``: 1 = white background, 0 = stroke,
-    so the values are inverted here), resized nearest-neighbour if ``shape`` is not 32; when the file is absent an X
-    of the same proportions is drawn (``truth.meta["source"]`` says which). The CSV's first row is the image's top,
-    so the rows are flipped: drawn with ``origin="lower"`` the X looks as in the toolbox.
+    Read from :data:`X_IMAGE_FILE` under the data folder (inverted, and flipped so that drawn with
+    ``origin="lower"`` the X looks as in the toolbox), resized nearest-neighbour if ``shape`` is not 32; when the file
+    is absent an X of the same proportions is drawn (``truth.meta["source"]`` says which).
 
     >>> x_image().truth.shape
     (32, 32)
@@ -157,16 +145,12 @@ def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
 def noisy_image(truth, noise=0.4, seed=0, model="gaussian") -> OccupancyGrid:
     """The thesis's "noisy scan" of a 0/1 image (sec. 4.1.1): an observed P(occupied) per cell.
 
-    Models:
+    - ``"gaussian"``: ``P = clip(truth + N(0, noise**2), 0, 1)``, the noise of the UGM denoising demo (``X +
+      randn/2``) clipped to probabilities.
+    - ``"flip"``: each cell's 0/1 value is flipped with probability ``noise`` (at most 0.5) and the observed bit
+      ``o`` reported as the posterior under a flat prior: ``P = 1 - noise`` if ``o = 1`` else ``noise``.
 
-    - ``"gaussian"`` (default): ``P = clip(truth + N(0, noise**2), 0, 1)``, the noise of the
-      UGM denoising demo (``X + randn/2``) clipped to probabilities. ``noise = 0.4`` gives an
-      MSE against the truth of about 0.078 (the thesis reports 0.0825 before LBP).
-    - ``"flip"``: each cell's 0/1 value is flipped with probability ``noise`` and the observed bit ``o`` is reported
-      as the posterior under a flat prior: ``P = 1 - noise`` if ``o = 1`` else ``noise``.
-
-    ``truth``: an OccupancyGrid or (H, W) array of 0/1; ``noise``: sigma (gaussian) or the flip probability in
-    [0, 0.5] (flip); ``seed``: for ``np.random.default_rng``.
+    ``truth``: an OccupancyGrid, Scene or (H, W) array of 0/1.
 
     >>> g = noisy_image(x_image().truth, 0.4, seed=1)
     >>> bool(((g.probability >= 0) & (g.probability <= 1)).all())
@@ -209,15 +193,11 @@ _OCCLUDED_LAYOUTS = {
 
 
 def occluded_walls(variant="train", size=THESIS_SIZE, resolution=THESIS_RESOLUTION, seed=None) -> Scene:
-    """A walled room where small foreground walls hide parts of long background walls.
+    """A walled room where small foreground walls hide parts of long background walls (thesis Fig. 27; "test": 32).
 
-    The robot stands in the upper-left corner (thesis Fig. 27/28); ``variant="test"`` is a
-    similar but different layout (three background walls, three small occluders; Fig. 32).
-    The thesis scanned these from the corner (``default_mode="look"``): the shadows of the
-    small walls and the gaps between far beams are what LBP must fill in.
-
-    ``variant``: "train" or "test"; ``size``: the side [cells], the layout scaled from 40 cells; ``resolution``
-    [m/cell]; ``seed``: None for the canonical layout, or an int to jitter every wall by up to 2 cells.
+    The thesis scanned these from the upper-left corner (``default_mode="look"``): the shadows of the small walls
+    and the gaps between far beams are what LBP must fill in. ``size``: the side [cells], the layout scaled from
+    :data:`THESIS_SIZE`; ``seed``: None for the canonical layout, or an int to jitter every wall by up to 2 cells.
 
     >>> s = occluded_walls("test"); s.start_cell()
     (2, 37)
@@ -278,15 +258,12 @@ def _random_boxes(rng, size, n_boxes=8, gap=3):
 
 
 def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=THESIS_RESOLUTION, seed=None) -> Scene:
-    """An office-like room with boxes (cubicles) the robot cannot enter (thesis Fig. 36, 37).
+    """An office-like room with boxes (cubicles) the robot cannot enter (thesis Fig. 36; "test": 37).
 
-    ``hollow=False``: the boxes are solid (occupied inside). ``hollow=True``: only their one-cell outline is
-    occupied; the centre is empty but enclosed, so no robot sees it (Fig. 40, the case where LBP makes the grid
-    worse). The thesis scanned every cell the robot can reach (``default_mode="explore"``).
-
-    ``variant``: "train" (a regular 3 x 3 arrangement with one gap) or "test" (irregular sizes); ``size`` [cells]:
-    the layout scaled from 40; ``resolution`` [m/cell]; ``seed``: None for the canonical layout, or an int for
-    random boxes (8 boxes, 3-cell corridors).
+    ``hollow=True``: only the boxes' one-cell outline is occupied; the centre is empty but enclosed, so no robot sees
+    it (Fig. 40, the case where LBP makes the grid worse). The thesis scanned every cell the robot can reach
+    (``default_mode="explore"``). ``size`` [cells]: the layout scaled from :data:`THESIS_SIZE`; ``seed``: None for
+    the canonical layout, or an int for 8 random boxes.
 
     >>> s = enclosed_boxes("train", hollow=True)
     >>> bool(s.truth.probability[7, 7] == 0.0)  # inside a hollow box
@@ -320,21 +297,16 @@ def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=T
 
 
 # --- names ---------------------------------------------------------------------------
-SCENES = {
-    "x": lambda **kw: x_image(**kw),
-    "occluded-train": lambda **kw: occluded_walls("train", **kw),
-    "occluded-test": lambda **kw: occluded_walls("test", **kw),
-    "enclosed-train": lambda **kw: enclosed_boxes("train", **kw),
-    "enclosed-test": lambda **kw: enclosed_boxes("test", **kw),
-    "hollow-train": lambda **kw: enclosed_boxes("train", hollow=True, **kw),
-    "hollow-test": lambda **kw: enclosed_boxes("test", hollow=True, **kw),
-    "office": lambda **kw: office_floor(**kw),
+SCENES = {  # name -> the scene's maker, its variant given
+    "x": partial(x_image),
+    "occluded-train": partial(occluded_walls, "train"),
+    "occluded-test": partial(occluded_walls, "test"),
+    "enclosed-train": partial(enclosed_boxes, "train"),
+    "enclosed-test": partial(enclosed_boxes, "test"),
+    "hollow-train": partial(enclosed_boxes, "train", hollow=True),
+    "hollow-test": partial(enclosed_boxes, "test", hollow=True),
+    "office": partial(office_floor),
 }
-
-
-_SCENE_MAKERS = {"x": x_image, "office": office_floor,
-                 **{k: occluded_walls for k in ("occluded-train", "occluded-test")},
-                 **{k: enclosed_boxes for k in ("enclosed-train", "enclosed-test", "hollow-train", "hollow-test")}}
 
 
 def make_scene(name, **kwargs) -> Scene:
@@ -345,8 +317,7 @@ def make_scene(name, **kwargs) -> Scene:
     """
     if name not in SCENES:
         raise InputError("scene", f"unknown scene {name!r}; choose one of {', '.join(SCENES)}")
-    maker = _SCENE_MAKERS[name]
-    accepted = set(inspect.signature(maker).parameters) - {"variant", "hollow"}
+    accepted = set(inspect.signature(SCENES[name].func).parameters) - {"variant", "hollow"}
     for key in kwargs:
         if key not in accepted:
             raise InputError(key, f"scene {name!r} takes no {key!r}; it takes {', '.join(sorted(accepted))}")

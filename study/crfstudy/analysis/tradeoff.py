@@ -26,10 +26,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from crfmap.assess.calibration import paired_calibration
 from crfmap.assess.navigation import nav_scores
 from crfmap.assess.scansplit import score
 from crfmap.crf.presets import DEFAULT_PRESET, coupling_table, get_preset
+from crfstudy.calibration import paired_calibration
 from crfstudy.experiments.goal_rules import OLD_DEFAULT, better, no_worse
 
 COUPLINGS = (0.25, 0.30, 0.33, 0.35)  # J: the gate search's grid (0.35: the certainty preset's, on the Bethe point)

@@ -142,12 +142,13 @@ def score_recording(scans, settings: GoalSettings, calibrators: dict, progress=N
     ``scans``: the recording's ScanSet; ``calibrators``: :func:`fit_calibrators` of the training recording;
     ``progress``: a callable given a short label before each stage (a tqdm bar's ``set_postfix_str``).
     """
-    from crfmap.assess.calibration import paired_calibration, split_calibration
+    from crfmap.assess.calibration import split_calibration
     from crfmap.assess.comparison import compare
     from crfmap.assess.localisation import compare_localisation
     from crfmap.assess.navigation import nav_scores
     from crfmap.assess.scansplit import scan_split
     from crfmap.crf.presets import get_preset
+    from crfstudy.calibration import paired_calibration
 
     say = progress or (lambda _: None)
     started = time.perf_counter()
