@@ -32,7 +32,7 @@ from crfmap.world.scenes import enclosed_boxes
 from crfstudy.experiments import rooms
 from crfstudy.experiments.pipeline import (THESIS_TWO_ITERATIONS, TO_CONVERGENCE, evaluate_pipeline,
                                            learn_search_gradient, metric_row, scan_scene, score,
-                                           train_and_test)  # noqa: F401  (train_and_test: the notebooks' step, called from here)
+                                           train_and_test)  # noqa: F401  (the notebooks take train_and_test from here, their one helper)
 from crfstudy.paired import paired_difference, value_range
 from crfstudy.plotting import plot_roc, show_grid
 
