@@ -7,9 +7,7 @@ Modules:
 - :mod:`crfstudy.experiments.explorer_view` / ``explorer_panel``: the live figure updated in place, the widget panel
 - :mod:`crfstudy.experiments.office_online`: ``map_online``, ``online_numbers``, ``OnlineRun``, ``versus_offline``, ``near_versus_offline``, ``default_table_drift``
 - :mod:`crfstudy.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
-- :mod:`crfstudy.experiments.thesis_learning`: the learning experiments' tables (notebooks 05, 06): ``make_learners``, ``metrics_table``, ``potentials_rows``, ``results_summary``, ``same_cells_predictions``
-- :mod:`crfstudy.experiments.scene_figures`: ``draw`` (a grid with the robot's start), ``landscape_figure``
-- :mod:`crfstudy.experiments.occlusion_why`: why the occlusion result does not reproduce (``why_study`` and its tables)
+- :mod:`crfstudy.experiments.thesis_learning`: the learning experiments of notebooks 05 and 06, their helper: ``make_learners``, ``metrics_table``, ``potentials_rows``, ``same_cells_scores``, the scene panels (``panels_figure``, ``landscape_figure``, ``roc_figure``), why the occlusion result does not reproduce (``why_study`` and its tables), the noisy generated rooms paired room by room (``noisy_rooms``, ``paired_over_rooms``)
 - :mod:`crfstudy.experiments.speed_tables` / ``speed_figures``: notebook 09's tables and goals figure from ``crfmap bench`` records
 - :mod:`crfstudy.experiments.nav_goals`: issue 38's goal table (notebook 12; ``python -m crfstudy.experiments.nav_goals``)
 """
