@@ -3,7 +3,7 @@
 Modules:
 
 - :mod:`crfstudy.experiments.pipeline`: ``scan_scene``, ``evaluate_pipeline``, ``train_and_test``, ``search_tables``, ``PipelineResult``, ``TrainTest``
-- :mod:`crfstudy.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``, ``warm_up``
+- :mod:`crfstudy.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``, ``warm_up``, ``panel``
 - :mod:`crfstudy.experiments.explorer_view` / ``explorer_panel``: the live figure updated in place, the widget panel
 - :mod:`crfstudy.experiments.office_online`: ``map_online``, ``online_numbers``, ``OnlineRun``, ``versus_offline``, ``near_versus_offline``, ``default_table_drift``
 - :mod:`crfstudy.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
