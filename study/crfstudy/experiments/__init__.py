@@ -10,6 +10,6 @@ Modules:
 - :mod:`crfstudy.experiments.thesis_learning`: the learning experiments' tables (notebooks 05, 06): ``make_learners``, ``metrics_table``, ``potentials_rows``, ``results_summary``, ``same_cells_predictions``
 - :mod:`crfstudy.experiments.scene_figures`: ``draw`` (a grid with the robot's start), ``landscape_figure``
 - :mod:`crfstudy.experiments.occlusion_why`: why the occlusion result does not reproduce (``why_study`` and its tables)
-- :mod:`crfstudy.experiments.speed_tables` / ``speed_figures``: notebook 09's tables and goals figure from ``crfmap bench`` records
+- :mod:`crfstudy.experiments.speed`: notebook 09's benchmark run, figures and tables from ``crfmap bench`` records
 - :mod:`crfstudy.experiments.nav_goals`: issue 38's goal table (notebook 12; ``python -m crfstudy.experiments.nav_goals``)
 """
