@@ -6,6 +6,8 @@ Modules:
 - :mod:`crfstudy.experiments.explorer`: ``explore``, ``observe``, ``run``, ``draw``, ``warm_up``, ``panel``
 - :mod:`crfstudy.experiments.explorer_view` / ``explorer_panel``: the live figure updated in place, the widget panel
 - :mod:`crfstudy.experiments.office_online`: ``map_online``, ``online_numbers``, ``OnlineRun``, ``versus_offline``, ``near_versus_offline``, ``default_table_drift``
+- :mod:`crfstudy.experiments.intel_office`: notebook 07's figures, Table 26's predictors, folds and rows, the
+  leave-one-out check, the same-cell scores, the online runs and table, the paper's numbers
 - :mod:`crfstudy.experiments.background`: ``gibbs_ising``, ``ising_exact``, ``ising_energy``
 - :mod:`crfstudy.experiments.thesis_learning`: the learning experiments' tables (notebooks 05, 06): ``make_learners``, ``metrics_table``, ``potentials_rows``, ``results_summary``, ``same_cells_predictions``
 - :mod:`crfstudy.experiments.scene_figures`: ``draw`` (a grid with the robot's start), ``landscape_figure``
