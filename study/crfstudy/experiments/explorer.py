@@ -13,6 +13,7 @@ number of iterations and a bound, and draw truth / before / after / ROC. The not
   one, so a widget redrawing it many times leaks nothing).
 - :func:`warm_up`: compile (or load from numba's cache) every schedule's kernels on a tiny grid,
   so the first switch to a schedule does not stall the panel (:mod:`crfstudy.experiments.explorer_panel`).
+- :func:`panel`: that panel of widgets, wired to :func:`run` (what notebook 08 displays).
 
 >>> ex = run("x", noise=0.42, seed=0)
 >>> bool(ex.after.mse < ex.before.mse)
@@ -274,3 +275,14 @@ def to_png(fig, dpi: int = 90) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()
+
+
+def panel(scene="x", image_noise=DEFAULT_NOISE, range_noise=0.0, schedule="checkerboard", iterations=None,
+          radius=None, seed=0, preset=DEFAULT_PRESET):
+    """The explorer's widget panel (:class:`crfstudy.experiments.explorer_panel.ExplorerPanel`) for this setting.
+
+    Imported here on first use: the panel module imports this one, and ipywidgets is only needed live.
+    """
+    from crfstudy.experiments.explorer_panel import ExplorerPanel
+
+    return ExplorerPanel(scene, image_noise, range_noise, schedule, iterations, radius, seed, preset)

@@ -219,3 +219,16 @@ def test_panel_redraws_on_each_widget_change():
     n = len(panel.timings)
     panel.controls["l_oo"].value = 0.0  # link row C1 is [0, 0]: the error in the status line, not a crash
     assert panel.status.value.startswith("<span") and "link" in panel.status.value and len(panel.timings) == n
+
+
+def test_panel_is_built_for_the_setting_asked_for():
+    from crfstudy.experiments.explorer_panel import ExplorerPanel
+
+    panel = explorer.panel("enclosed-test", image_noise=0.3, range_noise=0.02, schedule="thesis", iterations=5,
+                           radius=2.0, seed=3)
+    assert isinstance(panel, ExplorerPanel)
+    settings = panel.settings()
+    assert (settings["scene"], settings["schedule"], settings["iterations"], settings["seed"]) == \
+        ("enclosed-test", "thesis", 5, 3)
+    assert settings["radius"] == 2.0
+    assert panel.controls["image_noise"].value == 0.3 and panel.controls["range_noise"].value == 0.02

@@ -1,5 +1,5 @@
-"""Notebook 09's tables from benchmark records: the rows for given records, exactly."""
-from crfstudy.experiments import speed_tables as tables
+"""Notebook 09's helper: the rows, captions and figures for given benchmark records, exactly."""
+from crfstudy.experiments import speed as tables
 
 
 def fast(size, threads, mcells, dtype="float32"):
@@ -94,3 +94,91 @@ def test_the_thesis_tables_convergence_rows_are_information_not_goals():
                        "(information: the thesis's table)"]
     from crfstudy.repro.paper import missed_goals
     assert missed_goals(["measurement", "grid", "value", "goal"], rows) == "none"
+
+
+def converge(method, size, iterations, seconds, difference=0.0):
+    return {"method": method, "size": size, "iterations": iterations, "seconds_to_converge": seconds,
+            "max_belief_difference_vs_exact": difference}
+
+
+def test_benchmark_sizes_are_the_quick_ones_the_given_ones_or_the_full_sweep():
+    from crfstudy.bench.common import QUICK_SIZES, SIZES
+
+    assert tables.benchmark_sizes([256, 512], quick=True) == list(QUICK_SIZES)
+    assert tables.benchmark_sizes([256, 512], quick=False) == [256, 512]
+    assert tables.benchmark_sizes(None, quick=False) == list(SIZES)
+
+
+def test_settings_text_says_what_the_reproduction_leaves_out():
+    text = tables.settings_text(False, [256, 1024], 3, 5e7, 1, 256, 6, 1e-6, 64, cold=False, peers=False,
+                                preset_maps=["intel"], converge_start_size=2048)
+    assert text.startswith("reproduction settings, lighter than `make bench`: grids up to 1024^2, medians of 3 "
+                           "repeats of 5e+07 cell updates, best of 1 convergence run(s)")
+    assert ", no empty-cache compilation" in text and ", no published-peer or ROS node rows" in text
+    assert text.endswith("convergence on intel only, the thesis table's on 2048^2")
+    full = tables.settings_text(False, [256], 5, 2e8, 2, 512, 36, 1e-7, 256, cold=True, peers=True,
+                                preset_maps=["intel", "aces"], converge_start_size=4096)
+    assert "no empty-cache" not in full and "no published-peer" not in full and "intel, aces only" in full
+    assert tables.settings_text(True, [128], 3, 5e7, 1, 256, 6, 1e-6, 64, False, False, ["intel"], 2048) == \
+        "quick settings (tests and CI)"
+
+
+def test_converge_lines_by_size_then_method():
+    records = [converge("crfmap-converge", 512, 40, 0.5), converge("crfmap-converge-exact", 256, 30, 0.25),
+               converge("crfmap-converge", 256, 31, 0.125, 2e-6), {"method": "crfmap-fast", "size": 256}]
+    lines = tables.converge_lines(records).splitlines()
+    assert [line.split()[:2] for line in lines] == [["256^2", "crfmap-converge"], ["256^2", "crfmap-converge-exact"],
+                                                    ["512^2", "crfmap-converge"]]
+    assert lines[0].endswith("31 iterations 0.125 s  max belief difference vs exact 2.0e-06")
+
+
+def test_speed_caption_names_the_bandwidth_bound_and_a_reduced_sweep():
+    caption = tables.speed_caption([256, 1024], 2, {"gbytes_per_second": 12.34}, 321.0, "quick settings")
+    assert "2 threads, measured bandwidth 12.3 GB/s, one-pass bound 321 Mcell/s in float32" in caption
+    assert "Reduced sweep (grids up to 1024^2); the full sweep to 8192^2 is `make bench`." in caption
+    assert caption.endswith(" This run: quick settings.")
+    assert "Reduced sweep" not in tables.speed_caption([8192], 2, {"gbytes_per_second": 1.0}, 1.0, "x")
+
+
+def test_the_figures_draw_every_series_measured():
+    import matplotlib.pyplot as plt
+
+    records = [fast(s, 1, 10.0 * s) for s in (256, 128)] + [{"method": "numpy-baseline", "size": 128,
+                                                             "mcells_per_second": 5.0}]
+    series = [("numpy-baseline", {}, "baseline", "k-o"), ("crfmap-fast", dict(threads=1), "fast", "C0-s")]
+    fig = tables.throughput_figure(records, series, bound=300.0, top=2)
+    (ax,) = fig.axes
+    assert [line.get_label() for line in ax.lines] == ["baseline", "fast", "one-pass bound, 2 threads (300)"]
+    assert list(ax.lines[1].get_xdata()) == [128 ** 2, 256 ** 2]  # by size
+    plt.close(fig)
+    fig = tables.converge_figure([converge("crfmap-converge", 256, 30, 0.25), converge("crfmap-converge", 128, 9, 0.1)])
+    (ax,) = fig.axes
+    assert [line.get_label() for line in ax.lines] == ["fast, frozen tiles (default)"]  # unmeasured kinds left out
+    assert ax.get_xscale() == ax.get_yscale() == "log"
+    plt.close(fig)
+
+
+def test_goals_figure_has_its_three_panels():
+    import matplotlib.pyplot as plt
+
+    records = [{"method": "infer-vs-kernel", "size": 512, "threads": 2, "kernel_mcells_per_second": 400.0,
+                "infer_mcells_per_second": 360.0, "ratio": 0.9, "goal": 0.8},
+               {"method": "start-warm", "seconds": 1.5}, converge("crfmap-converge", 256, 30, 0.25)]
+    fig = tables.goals_figure(records, top=2, numba_threads=2)
+    titles = [ax.get_title() for ax in fig.axes]
+    assert titles == ["infer() end to end vs its kernel (goal >= 0.8x)", "First run (compiling) vs warm start",
+                      "Convergence against size"]
+    plt.close(fig)
+
+
+def test_slowest_cells_reads_the_notebooks_of_the_last_reproduction(tmp_path, monkeypatch):
+    import json
+
+    from crfstudy import paths
+
+    (tmp_path / "notebooks").mkdir()
+    cells = [{"cell_type": "code", "metadata": {"papermill": {"duration": d}}, "source": [f"step_{d:g}()\n"]}
+             for d in (1.0, 7.0)]
+    (tmp_path / "notebooks" / "05_x.ipynb").write_text(json.dumps({"cells": cells, "metadata": {}}))
+    monkeypatch.setattr(paths, "OUT", tmp_path)
+    assert tables.slowest_cells(n=1).splitlines()[2] == "| 05_x | 1 | 7.0 | `step_7()` |"
