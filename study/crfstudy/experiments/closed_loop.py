@@ -3,7 +3,9 @@
 Every onboard map kind explores the same scenes with the same seed (:func:`crfstudy.closed_loop.exploration.explore`),
 then the navigation task plans on its finished map (:func:`crfstudy.closed_loop.exploration.navigation_task`).
 :func:`paired_table` gives each kind's mean per metric and its paired difference to the raw grid with a
-bootstrap interval over the scenes (:func:`crfstudy.paired.paired_difference`, seeded).
+bootstrap interval over the scenes (:func:`crfstudy.paired.paired_difference`, seeded). Notebook 11 reads it:
+:class:`~crfstudy.closed_loop.exploration.ExploreSettings` (how the robot explores) is taken from here with the
+rest, and :func:`warm_up` compiles every onboard map's kernels before the timed runs.
 
 >>> scenes = closed_loop_scenes(n_floors=1, floor_size=(6.0, 5.0), thesis_scenes=())
 >>> [label for label, _ in scenes]
@@ -49,6 +51,16 @@ def closed_loop_scenes(n_floors=20, floor_size=(20.0, 15.0), resolution=0.1, fir
     floors = [(f"office-{s}", office_floor(width, height, resolution, seed=s))
               for s in range(first_seed, first_seed + n_floors)]
     return floors + [(name, make_scene(name)) for name in thesis_scenes]
+
+
+def warm_up(scene, kinds=None, seed=0) -> list:
+    """Explore ``scene`` for two scans with every kind (None: :data:`ONBOARD_MAPS`): numba compiles (or loads)
+    each onboard map's kernels here, so that no kind's compute time in :func:`run_closed_loop` holds a first
+    compile. The kinds warmed, in order."""
+    kinds = list(ONBOARD_MAPS) if kinds is None else list(kinds)
+    for kind in kinds:
+        explore(scene, kind, ExploreSettings(robot_radius=None, max_scans=2), seed=seed)
+    return kinds
 
 
 def _record(label, kind, run, scene, radius, n_pairs, settings, seed):

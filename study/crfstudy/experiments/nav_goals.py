@@ -15,6 +15,12 @@ How each goal is decided: :mod:`crfstudy.experiments.goal_rules`.
 
 ``python -m crfstudy.experiments.nav_goals [--quick] [RECORDING ...]`` prints the table (notebook 12 saves it).
 
+Notebook 12 reads everything through this module: :func:`crfmap.data.data_file` (where each recording is; the
+library has it in no public package), :func:`run`, the tables of :mod:`~crfstudy.experiments.goal_rules`
+(:func:`goal_matrix`, :func:`goal_details`, :func:`harder_matrix`, taken from here), :func:`verdict_numbers`,
+:func:`goals_figure`, and the trade-offs of :mod:`crfstudy.analysis.tradeoff` with the goal table's settings
+(:func:`tradeoff_curves`, :func:`tradeoff_tables`, :func:`tradeoff_loop_records`, :func:`tradeoff_loop_table`).
+
 >>> GoalSettings().resolution, "hilbert" in QUICK.peers
 (0.05, False)
 """
@@ -28,8 +34,10 @@ import numpy as np
 
 from crfmap.assess.peers import PEERS
 from crfmap.crf.presets import DEFAULT_PRESET
+from crfmap.data import data_file, have_data
 from crfmap.errors import InputError
-from crfstudy.experiments.goal_rules import (LEGEND, OLD_DEFAULT, closed_loop_goals, goal_details, goal_matrix,
+from crfstudy.analysis import tradeoff
+from crfstudy.experiments.goal_rules import (LEGEND, MISSED, OLD_DEFAULT, closed_loop_goals, goal_details, goal_matrix,
                                              harder_matrix, recording_goals)
 
 RECORDINGS = {  # name: file under crfmap.data.data_root(); the names notebook 10 uses
@@ -66,6 +74,12 @@ class GoalSettings:
 
 QUICK = GoalSettings(resolution=0.1, n_boot=20, peers=tuple(p for p in PEERS if p != "hilbert"), loc_scans=30,
                      n_floors=1, floor_size=(8.0, 6.0), thesis_scenes=("enclosed-train",), max_scans=150, loop_boot=200)
+
+
+def peer_rows(hilbert: bool = True) -> tuple:
+    """The published peers scored beside the presets (:data:`crfmap.assess.peers.PEERS`), without the Bayesian
+    Hilbert map unless ``hilbert`` (the slowest fit by far)."""
+    return tuple(p for p in PEERS if hilbert or p != "hilbert")
 
 
 # --- scoring --------------------------------------------------------------------------------------------------
@@ -237,6 +251,57 @@ def goals_figure(summaries: dict):
     return fig
 
 
+def verdict_numbers(columns: dict) -> tuple:
+    """(verdicts, missed) of :func:`run`'s ``columns`` as plain numbers: ``verdicts[where][goal]`` = {what, verdict,
+    numbers}, ``missed[where]`` = the goals :data:`~crfstudy.experiments.goal_rules.MISSED` there."""
+    verdicts = {where: {v.goal: {"what": v.what, "verdict": v.status, "numbers": v.evidence} for v in vs}
+                for where, vs in columns.items()}
+    missed = {where: [g for g, v in vs.items() if v["verdict"] == MISSED] for where, vs in verdicts.items()}
+    return verdicts, missed
+
+
+# --- the trade-offs (crfstudy.analysis.tradeoff) at the goal table's settings ------------------------------------
+
+TRADEOFF_MOVED = {  # what each trade-off table moves, as its caption names it
+    "J": "the coupling J",
+    "unobserved_prior": "the never-observed prior pi (it moves no decision: the gate reads those cells unknown)",
+    "free_evidence": "the gate's free_evidence (net passes before a cell reads free)",
+    "lethal_evidence": "the gate's lethal_evidence (net hits that keep a cell lethal)"}
+
+
+def tradeoff_curves(files: dict, settings: GoalSettings) -> dict:
+    """{setting: {recording: scores}} of :func:`crfstudy.analysis.tradeoff.run` on ``files`` ({name: path}) at the
+    goal table's resolution, resamples, block and seed."""
+    return tradeoff.run(files, resolution=settings.resolution, n_boot=settings.n_boot, block=settings.block,
+                        seed=settings.seed, progress=False)
+
+
+def tradeoff_tables(curves: dict, settings: GoalSettings) -> dict:
+    """{setting: {header, rows, caption}} (``save_table``'s arguments): :func:`crfstudy.analysis.tradeoff.tradeoff_table` of each of
+    :func:`tradeoff_curves`' settings, captioned with what it moves (:data:`TRADEOFF_MOVED`)."""
+    tables = {}
+    for setting, scores in curves.items():
+        caption = (f"The default preset {DEFAULT_PRESET} with {TRADEOFF_MOVED[setting]} moved, every other constant "
+                   f"kept: per sub-goal, the recordings ({', '.join(scores)}) where it is met by the goal table's "
+                   f"rules, and the mean difference ({settings.n_boot} resamples); free cells: seen cells nav2 reads "
+                   "free, as a share of the raw grid's.")
+        header, rows = tradeoff.tradeoff_table(scores)
+        tables[setting] = {"header": header, "rows": rows, "caption": caption}
+    return tables
+
+
+def tradeoff_loop_records(settings: GoalSettings) -> list:
+    """The closed loop with each of the gate's ``free_evidence`` (:func:`crfstudy.analysis.tradeoff.closed_loop_records`)
+    on the goal table's scenes, budget and seed."""
+    return tradeoff.closed_loop_records(settings)
+
+
+def tradeoff_loop_table(records: list, settings: GoalSettings) -> tuple:
+    """(header, rows): :func:`crfstudy.analysis.tradeoff.closed_loop_table` of ``records`` with the goal table's
+    resamples over scenes and seed."""
+    return tradeoff.closed_loop_table(records, n_boot=settings.loop_boot, seed=settings.seed)
+
+
 # --- the command --------------------------------------------------------------------------------------------------
 
 
@@ -275,7 +340,6 @@ def main(argv=None) -> int:
     """``python -m crfstudy.experiments.nav_goals [--quick] [RECORDING ...]``: print issue 38's goal table."""
     import argparse
 
-    from crfmap.data import data_file, have_data
     from crfmap.environment import prepare
     from crfstudy.repro.report import markdown_table
 
@@ -306,9 +370,10 @@ def main(argv=None) -> int:
     return 0
 
 
-__all__ = ["RECORDINGS", "ROLES", "QUICK_RECORDINGS", "TRAINING", "CALIBRATED", "GoalSettings", "QUICK",
+__all__ = ["data_file", "RECORDINGS", "ROLES", "QUICK_RECORDINGS", "TRAINING", "CALIBRATED", "GoalSettings", "QUICK", "peer_rows",
            "fit_calibrators", "harder_scores", "score_recording", "run_closed_loop_records", "goals_figure", "run",
-           "main"]
+           "verdict_numbers", "goal_matrix", "goal_details", "harder_matrix", "LEGEND", "TRADEOFF_MOVED",
+           "tradeoff_curves", "tradeoff_tables", "tradeoff_loop_records", "tradeoff_loop_table", "main"]
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

@@ -237,3 +237,46 @@ def test_the_notebook_reads_the_registry_s_recordings_and_the_command_s_settings
                            n_floors=p["n_floors"], floor_size=(p["floor_width"], p["floor_height"]),
                            max_scans=p["max_scans"], loop_boot=p["loop_boot"])
     assert asdict(full) == asdict(ng.GoalSettings())  # the notebook's full run prints what the command prints
+
+
+# ---- what notebook 12 reads from its helper ------------------------------------------------------------------------
+
+
+def test_peer_rows_leave_out_only_the_hilbert_map_when_asked():
+    assert ng.peer_rows() == PEERS and "hilbert" in PEERS
+    assert ng.peer_rows(hilbert=False) == tuple(p for p in PEERS if p != "hilbert")
+    assert ng.QUICK.peers == ng.peer_rows(hilbert=False)
+
+
+def test_verdict_numbers_are_the_verdicts_as_plain_data_and_the_misses_named():
+    columns = {"x": gr.recording_goals(gr.example_summary()), "loop": gr.closed_loop_goals(_records((50, 50, 50)))}
+    verdicts, missed = ng.verdict_numbers(columns)
+    json.dumps(verdicts)  # save_numbers writes them
+    assert missed == {"x": ["1c", "8a"], "loop": ["7c"]}
+    first = columns["x"][0]
+    assert verdicts["x"][first.goal] == {"what": first.what, "verdict": first.status, "numbers": first.evidence}
+
+
+def test_tradeoff_tables_caption_each_setting_with_what_it_moves():
+    from crfstudy.analysis import tradeoff
+
+    entry = {"value": 0.1, "diff": -0.01, "ci": [-0.02, 0.0], "interval_only": False, "met": True}
+    scores = {r: {"v": dict({g: entry for g, *_ in tradeoff.SUBGOALS}, iterations=10, free_vs_raw=0.9)}
+              for r in ("ros2", "ros1")}
+    tables = ng.tradeoff_tables({"J": scores, "free_evidence": scores}, ng.QUICK)
+    assert list(tables) == ["J", "free_evidence"]
+    header, rows = tradeoff.tradeoff_table(scores)
+    assert tables["J"]["header"] == header and tables["J"]["rows"] == rows
+    assert "with the coupling J moved" in tables["J"]["caption"] and "(ros2, ros1)" in tables["J"]["caption"]
+    assert f"({ng.QUICK.n_boot} resamples)" in tables["free_evidence"]["caption"]
+    assert ng.TRADEOFF_MOVED["free_evidence"] in tables["free_evidence"]["caption"]
+
+
+def test_the_tradeoff_loop_table_uses_the_goal_table_s_resamples_and_seed():
+    from crfstudy.analysis import tradeoff
+
+    records = [{"scene": s, "kind": k, "scans": scans + (k == "crf") * (i % 2), "plans_into_walls": 1,
+                "dangerous_miss_rate": 0.01, "ghosts": 2}
+               for i, (s, scans) in enumerate((("s1", 50), ("s2", 70), ("s3", 90))) for k in ("raw", "crf")]
+    assert ng.tradeoff_loop_table(records, TINY) == tradeoff.closed_loop_table(records, n_boot=TINY.loop_boot,
+                                                                                seed=TINY.seed)
