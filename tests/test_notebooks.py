@@ -62,7 +62,7 @@ def test_notebook_executes(notebook, tmp_path, monkeypatch):
 # A notebook imports the library's public API (the names a package lists in __all__), the study's notebook plumbing
 # (crfstudy.repro.report: start, save, show) and at most one other study module, its helper; it defines nothing (a
 # function a notebook needs is study code, tested where it lives); a code cell is at most SHAPE_CELL_LINES lines.
-PUBLIC_PACKAGES = ("crfmap", "crfmap.world", "crfmap.sim", "crfmap.io", "crfmap.mapping", "crfmap.crf",
+PUBLIC_PACKAGES = ("crfmap", "crfmap.data", "crfmap.world", "crfmap.sim", "crfmap.io", "crfmap.mapping", "crfmap.crf",
                    "crfmap.assess")
 STUDY_PLUMBING = "crfstudy.repro.report"
 SHAPE_CELL_LINES = 20

@@ -30,6 +30,9 @@ DATA_SOURCES = {
 }
 
 
+__all__ = ["data_root", "data_file", "have_data"]
+
+
 def data_root() -> Path:
     """The folder holding the public data (``CRFMAP_DATA`` or ``../shared/data``)."""
     given = environment.folder("CRFMAP_DATA")

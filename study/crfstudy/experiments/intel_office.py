@@ -3,9 +3,8 @@ the LBP runs of Fig. 43, the cross-validation of Table 26 (predictors, folds, th
 leave-one-out check, the same-cell scores, the online section's runs and table, and the numbers the paper quotes.
 
 The notebook shows the calls that make the maps and beliefs (``build_grid``, ``infer``, ``OnlineMapper``);
-what is here turns them into figures, rows and numbers. ``data_file`` (:func:`crfmap.data.data_file`) and
-``neighbour_mean`` (:func:`crfstudy.analysis.crossval.neighbour_mean`) are here for the notebook too: the workflow
-finds a notebook's shared data by its ``data_file("...")`` calls.
+what is here turns them into figures, rows and numbers. ``neighbour_mean``
+(:func:`crfstudy.analysis.crossval.neighbour_mean`) is here for the notebook too.
 """
 from __future__ import annotations
 
@@ -16,7 +15,6 @@ import numpy as np
 from matplotlib.patches import Circle
 
 from crfmap.assess import evaluate
-from crfmap.data import data_file  # noqa: F401 - the notebook names its data file with it (the workflow reads that)
 from crfmap.grid import UNKNOWN
 from crfstudy.analysis.crossval import (block_folds, cross_validate, leave_one_out, lbp_predictor,
                                         neighbour_mean,  # noqa: F401 - notebook 07's gap baseline, used from here

@@ -15,8 +15,7 @@ How each goal is decided: :mod:`crfstudy.experiments.goal_rules`.
 
 ``python -m crfstudy.experiments.nav_goals [--quick] [RECORDING ...]`` prints the table (notebook 12 saves it).
 
-Notebook 12 reads everything through this module: :func:`crfmap.data.data_file` (where each recording is; the
-library has it in no public package), :func:`run`, the tables of :mod:`~crfstudy.experiments.goal_rules`
+Notebook 12 takes its study parts from this module: :func:`run`, the tables of :mod:`~crfstudy.experiments.goal_rules`
 (:func:`goal_matrix`, :func:`goal_details`, :func:`harder_matrix`, taken from here), :func:`verdict_numbers`,
 :func:`goals_figure`, and the trade-offs of :mod:`crfstudy.analysis.tradeoff` with the goal table's settings
 (:func:`tradeoff_curves`, :func:`tradeoff_tables`, :func:`tradeoff_loop_records`, :func:`tradeoff_loop_table`).
@@ -370,7 +369,7 @@ def main(argv=None) -> int:
     return 0
 
 
-__all__ = ["data_file", "RECORDINGS", "ROLES", "QUICK_RECORDINGS", "TRAINING", "CALIBRATED", "GoalSettings", "QUICK", "peer_rows",
+__all__ = ["RECORDINGS", "ROLES", "QUICK_RECORDINGS", "TRAINING", "CALIBRATED", "GoalSettings", "QUICK", "peer_rows",
            "fit_calibrators", "harder_scores", "score_recording", "run_closed_loop_records", "goals_figure", "run",
            "verdict_numbers", "goal_matrix", "goal_details", "harder_matrix", "LEGEND", "TRADEOFF_MOVED",
            "tradeoff_curves", "tradeoff_tables", "tradeoff_loop_records", "tradeoff_loop_table", "main"]

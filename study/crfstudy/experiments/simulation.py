@@ -9,7 +9,7 @@ The notebook makes the scans (``simulate``), the grids (``build_grid``) and read
   :func:`discretisation_share`);
 - odometry in the map frame (:func:`odometry_in_map`, :func:`scans_on_odometry`, :func:`motion_summary`);
 - timed builds of real recordings (:func:`timed_build`, :func:`recording_summary`, :func:`build_summary`,
-  :func:`builder_table`); :func:`data_file` (crfmap's shared-data lookup) finds them;
+  :func:`builder_table`);
 - :func:`first_hit`, crfmap's own ray caster, re-exported beside :func:`ray_paths` for the notebook's cross-check;
 - the figures (each returns a Figure; the notebook saves it).
 
@@ -26,14 +26,13 @@ import time
 import numpy as np
 from matplotlib.patches import Circle, Rectangle
 
-from crfmap.data import data_file
 from crfmap.frames import compose
 from crfmap.mapping import build_grid
 from crfmap.raycast import first_hit, line_cells
 from crfmap.recording import ScanSet
 from crfstudy.plotting import show_grid
 
-__all__ = ["builder_table", "build_summary", "cells_until_hit", "data_file", "discretisation_figure",
+__all__ = ["builder_table", "build_summary", "cells_until_hit", "discretisation_figure",
            "discretisation_share", "end_points", "first_hit", "in_occupied_cell", "motion_figure", "motion_summary",
            "odometry_in_map", "ray_paths", "raycast_figure", "real_maps_figure", "recording_summary", "scan_end_points",
            "scan_figure", "scans_on_odometry", "tie_rule_count", "tie_rule_figure", "tie_rule_paths", "timed_build"]
