@@ -66,8 +66,6 @@ PUBLIC_PACKAGES = ("crfmap", "crfmap.data", "crfmap.world", "crfmap.sim", "crfma
                    "crfmap.assess")
 STUDY_PLUMBING = "crfstudy.repro.report"
 SHAPE_CELL_LINES = 20
-# the notebooks redesigned so far; the shape test covers all of NOTEBOOKS once every one is
-REDESIGNED = {"01", "02", "03", "04", "05", "06", "07", "08", "09", "11", "12"}
 
 
 def shape_problems(notebook) -> list:
@@ -145,7 +143,6 @@ def test_the_shape_check_names_every_departure(tmp_path):
     assert len(problems) == 8
 
 
-@pytest.mark.parametrize("notebook", [nb for nb in NOTEBOOKS if nb.stem[:2] in REDESIGNED],
-                         ids=[nb.stem for nb in NOTEBOOKS if nb.stem[:2] in REDESIGNED])
+@pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[nb.stem for nb in NOTEBOOKS])
 def test_notebook_reads_as_the_study(notebook):
     assert shape_problems(notebook) == []

@@ -10,6 +10,7 @@ Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 - :mod:`crfmap.assess.localisation`: ``localise``, ``compare_localisation`` (maps scored by nav2_amcl's likelihood field on held-out scans)
 - :mod:`crfmap.assess.likelihood_field`: ``LaserModel``, ``LikelihoodField`` (nav2_amcl's laser model, as nav2 computes it)
 - :mod:`crfmap.assess.comparison`: ``compare``, ``method_names`` (every evaluated row of a scan split)
+- :mod:`crfmap.assess.calibration`: ``fit_temperature`` (one temperature for a model's log-odds)
 - :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
@@ -46,5 +47,6 @@ _API = {
     "localise": "localisation",
     "compare_localisation": "localisation",
     "LaserModel": "likelihood_field",
+    "fit_temperature": "calibration",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)

@@ -38,6 +38,8 @@ _API = {
     "Preset": "presets",
     "get_preset": "presets",
     "custom_preset": "presets",
+    "CRITICAL_COUPLING": "presets",
+    "table_coupling": "presets",
     "infer": "inference.lbp",
     "message": "inference.lbp",
     "LBPResult": "inference.result",

@@ -6,6 +6,7 @@ Public API (imported on first use, so ``import crfmap.io`` stays cheap):
 - :mod:`crfmap.io.bag_writer`: ``write_bag`` (the files as rosbag and each distro's rosbag2 lay them out:
   :mod:`crfmap.io.rosbag1_files`, :mod:`crfmap.io.rosbag2_files`)
 - :mod:`crfmap.io.carmen`: ``read_carmen``
+- :mod:`crfmap.io.recordings`: ``load_recording`` (a CARMEN log or a bag, told apart by the suffix)
 - :mod:`crfmap.io.map_server`: ``load_map``, ``save_map``, ``read_map_yaml``, ``map_yaml_text``
 - :mod:`crfmap.io.grid_files`: ``load_grid``, ``save_grid`` (by suffix)
 - :mod:`crfmap.io.nav2_loader`: nav2's per-pixel map loading rules (Humble, Jazzy+)
@@ -22,6 +23,7 @@ _API = {
     "read_bag": "bag_reader",
     "write_bag": "bag_writer",
     "read_carmen": "carmen",
+    "load_recording": "recordings",
     "load_map": "map_server",
     "save_map": "map_server",
     "load_grid": "grid_files",
