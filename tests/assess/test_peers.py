@@ -39,3 +39,14 @@ def test_errors_name_the_problem():
     bare = ScanSplit(*(np.zeros((3, 3), int) for _ in range(4)))
     with pytest.raises(InputError, match="first half's scans"):
         peer_rows(bare, ["octomap"])
+
+
+def test_every_peer_row_takes_the_same_arguments():
+    import inspect
+
+    from crfmap.assess import peers
+
+    for name, row in peers._ROWS.items():  # peer_rows calls each the same way: (split, progress=...)
+        parameters = inspect.signature(row).parameters
+        assert list(parameters)[:2] == ["split", "progress"], name
+        assert parameters["progress"].default is False, name

@@ -20,10 +20,11 @@ from crfmap.errors import InputError
 OCTOMAP_INTEL = {"p_hit": 0.8, "p_miss": 0.2, "clamp_min": 0.005, "clamp_max": 0.9999}
 
 
-def octomap_row(split, **options):
+def octomap_row(split, progress=False, **options):
     """OctoMap's clamped log-odds map of the split's first half, [y, x] P(occupied).
 
-    ``options`` (``p_hit``, ``p_miss``, ``clamp_min``, ``clamp_max``) override :data:`OCTOMAP_INTEL`.
+    ``options`` (``p_hit``, ``p_miss``, ``clamp_min``, ``clamp_max``) override :data:`OCTOMAP_INTEL`. ``progress``:
+    accepted like every row's (one pass over the scans: no bar).
     """
     from crfmap.mapping.octomap import octomap_grid
 
@@ -40,7 +41,7 @@ def hilbert_row(split, progress=False, **options):
     return p
 
 
-def octomap_defaults_row(split, **options):
+def octomap_defaults_row(split, progress=False, **options):
     """OctoMap's update at the OctoMap library's own defaults: the peer as users run it out of the box (tuned by Brier,
     ``octomap`` frees cells quickly and opens walls to nav2). Both rows are scored, so neither choice flatters the preset."""
     from crfmap.mapping.octomap import octomap_grid
@@ -48,7 +49,8 @@ def octomap_defaults_row(split, **options):
     return octomap_grid(_scans(split), split.resolution, bounds=split.bounds, **options).probability
 
 
-# The registry of published peers: name -> row function (split, **options) -> [y, x] P; a new peer is one entry.
+# The registry of published peers: name -> row function (split, progress=False, **options) -> [y, x] P; a new peer is
+# one entry.
 _ROWS = {"octomap": octomap_row, "octomap-defaults": octomap_defaults_row, "hilbert": hilbert_row}
 PEERS = tuple(_ROWS)
 
@@ -68,6 +70,6 @@ def peer_rows(split, methods=PEERS, progress=False) -> tuple[dict, dict]:
     predictions, seconds = {}, {}
     for name in methods:
         start = time.perf_counter()
-        predictions[name] = _ROWS[name](split, progress=progress) if name == "hilbert" else _ROWS[name](split)
+        predictions[name] = _ROWS[name](split, progress=progress)
         seconds[name] = time.perf_counter() - start
     return predictions, seconds
