@@ -28,6 +28,7 @@ def _room_log(path, n_scans=8, seed=0):
 
 
 def test_evaluate_table_and_json_match_the_library(tmp_path, capsys):
+    from crfmap.assess.baselines import BASELINES
     from crfmap.assess.comparison import compare
     from crfmap.assess.scansplit import scan_split
     from crfmap.io.carmen import read_carmen
@@ -35,7 +36,7 @@ def test_evaluate_table_and_json_match_the_library(tmp_path, capsys):
     log = _room_log(tmp_path / "room.log")
     assert main(["evaluate", str(log), "--resolution", "0.1", "--boot", "5"]) == 0
     out = capsys.readouterr().out
-    for name in ("raw", "logodds", "mean3x3", "median3x3", "closing3x3", "thesis", "graphcut", D):
+    for name in (*BASELINES, D):  # every registered baseline row, then the default preset
         assert re.search(rf"^\| {name} +\|", out, re.M)
     assert main(["evaluate", str(log), "--resolution", "0.1", "--boot", "5", "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
