@@ -9,7 +9,7 @@ import pytest
 if signal.getsignal(signal.SIGHUP) is signal.SIG_IGN:
     signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
-# a two-scan CARMEN log that the command tests build maps from (tests/mapping, tests/test_cli_ros.py)
+# a two-scan CARMEN log that the command tests build maps from (tests/mapping, tests/commands/test_ros_options.py)
 CARMEN_LINES = [
     "PARAM robot_frontlaser_offset 0.0 nohost 0",
     "FLASER 5 1.0 1.1 9.0 1.2 1.3 0.0 0.0 0.0 0.0 0.0 0.0 1.0 host 1.0",
