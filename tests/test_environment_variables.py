@@ -77,22 +77,3 @@ def test_numba_threads_unset_or_empty_means_numbas_default(monkeypatch):
     assert environment.numba_threads() is None
     monkeypatch.setenv("NUMBA_NUM_THREADS", "2")
     assert environment.numba_threads() == 2
-
-
-def test_run_context_is_checked(monkeypatch):
-    monkeypatch.setenv("CRFMAP_RUN", '{"notebook": "x/../y.ipynb"}')
-    with pytest.raises(InputError, match="CRFMAP_RUN="):
-        environment.run_context()
-
-
-@pytest.mark.parametrize("text", ["abc", "nan", "-5", "inf"])
-def test_reproduce_start_is_checked(monkeypatch, text):
-    from crfmap.environment import reproduce_started
-
-    monkeypatch.setenv("CRFMAP_REPRODUCE_STARTED", text)
-    with pytest.raises(InputError, match="CRFMAP_REPRODUCE_STARTED=.*expected a Unix time"):
-        reproduce_started()
-    monkeypatch.setenv("CRFMAP_REPRODUCE_STARTED", "1796286356")
-    assert reproduce_started() == 1796286356.0
-    monkeypatch.setenv("CRFMAP_REPRODUCE_STARTED", "")
-    assert reproduce_started() is None

@@ -14,8 +14,9 @@ from crfmap.errors import InputError
 from crfmap.environment import number
 
 
-def check_number(name, value, low=None, low_open=False, high=None) -> float:
-    """``value`` as a float; InputError naming ``name`` unless finite, >= ``low`` (> with ``low_open``), <= ``high``.
+def check_number(name, value, low=None, low_open=False, high=None, infinite=False) -> float:
+    """``value`` as a float; InputError naming ``name`` unless finite (or +inf with ``infinite``), >= ``low`` (> with
+    ``low_open``), <= ``high``.
 
     >>> check_number("noise", 0.25, low=0)
     0.25
@@ -25,8 +26,8 @@ def check_number(name, value, low=None, low_open=False, high=None) -> float:
     crfmap.errors.InputError: noise: must be >= 0, got -1
     """
     numeric = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-    if not numeric or not math.isfinite(value):
-        raise InputError(name, f"expected a finite number, got {value!r}")
+    if not numeric or not (math.isfinite(value) or (infinite and value == math.inf)):
+        raise InputError(name, f"expected a finite number{' or inf' if infinite else ''}, got {value!r}")
     value = float(value)
     if low is not None and (value < low or (low_open and value == low)):
         raise InputError(name, f"must be {'>' if low_open else '>='} {low:g}, got {value:g}")

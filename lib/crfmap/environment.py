@@ -3,12 +3,9 @@
 =====================  ===============================  ===========================================
 variable               read by                          accepted
 =====================  ===============================  ===========================================
-``CRFMAP_ROOT``        :mod:`crfstudy.paths`              an existing folder (the checkout; tests use a copy)
-``CRFMAP_OUTPUT_ROOT`` :mod:`crfstudy.paths`              a folder, existing or not; writable where written
+``CRFMAP_ROOT``        :mod:`crfmap.data`, crfstudy.paths  an existing folder (the checkout; tests use a copy)
 ``CRFMAP_DATA``        :func:`crfmap.data.data_root`   a folder (missing files are named when needed)
 ``CRFMAP_MAX_CELLS``   :func:`crfmap.checks.max_cells`  a whole number >= 1 (``4e8`` too); no "no limit"
-``CRFMAP_RUN``         :mod:`crfstudy.repro.provenance`   a JSON object (set by :mod:`crfstudy.repro.run`)
-``CRFMAP_REPRODUCE_STARTED`` :mod:`crfstudy.repro.buildinfo` a Unix time (set by ``make reproduce`` for the paper)
 ``NUMBA_NUM_THREADS``  numba, when it is imported       a whole number from 1 to the usable cores (checked then)
 ``NUMBA_CACHE_DIR``    numba, :mod:`crfmap._numba_cache` a folder numba can write (existing or not)
 ``OMP_WAIT_POLICY``    OpenMP (numba's parallel loops)  set to ``PASSIVE`` by :func:`prepare` unless set
@@ -29,14 +26,14 @@ import os
 import re
 import tempfile
 from pathlib import Path
-import json
 
 from crfmap.errors import InputError
 
 _WHOLE = re.compile(r"\s*[+]?\d+\s*\Z")
 
 
-def _named(variable, text) -> str:
+def named_value(variable, text) -> str:
+    """``variable=text`` as an error names it, a long value cut."""
     return f"{variable}={text}" if len(text) <= 80 else f"{variable}={text[:75]}[...]"
 
 
@@ -57,9 +54,9 @@ def folder(variable, default=None, must_exist=False) -> Path | None:
         raise InputError(variable, "is set but empty (unset it for the default, or name a folder)")
     path = Path(text).expanduser()
     if path.exists() and not path.is_dir():
-        raise InputError(_named(variable, text), "is not a folder")
+        raise InputError(named_value(variable, text), "is not a folder")
     if must_exist and not path.is_dir():
-        raise InputError(_named(variable, text), "no such folder")
+        raise InputError(named_value(variable, text), "no such folder")
     return path
 
 
@@ -68,7 +65,7 @@ def writable_folder(path, variable) -> Path:
     an unnamed temporary file; errors name ``variable`` (the setting that chose the folder) with its value."""
     path = Path(path)
     given = os.environ.get(variable)
-    source = _named(variable, given) if given else f"{path} (unset {variable}: its default)"
+    source = named_value(variable, given) if given else f"{path} (unset {variable}: its default)"
     probe = path
     while not probe.exists() and probe != probe.parent:
         probe = probe.parent
@@ -97,19 +94,19 @@ def whole_number(variable, text, what, low=1) -> int:
     if _WHOLE.match(text):  # digits: exact, however long
         value = int(text)
         if value < low:
-            raise InputError(_named(variable, text), f"must be at least {low}")
+            raise InputError(named_value(variable, text), f"must be at least {low}")
         return value
     try:
         value = float(text)
     except ValueError:
-        raise InputError(_named(variable, text), f"expected a whole number of {what}") from None
+        raise InputError(named_value(variable, text), f"expected a whole number of {what}") from None
     if not math.isfinite(value):
-        raise InputError(_named(variable, text), f"expected a finite whole number of {what}, got "
+        raise InputError(named_value(variable, text), f"expected a finite whole number of {what}, got "
                          f"{'infinity' if math.isinf(value) else 'not-a-number'}")
     if value != int(value):
-        raise InputError(_named(variable, text), f"expected a whole number of {what}")
+        raise InputError(named_value(variable, text), f"expected a whole number of {what}")
     if value < low:
-        raise InputError(_named(variable, text), f"must be at least {low}")
+        raise InputError(named_value(variable, text), f"must be at least {low}")
     return int(value)
 
 
@@ -119,13 +116,13 @@ def numba_threads() -> int | None:
     if not text.strip():
         return None
     if not _WHOLE.match(text):
-        raise InputError(_named("NUMBA_NUM_THREADS", text), "expected a whole number of threads >= 1")
+        raise InputError(named_value("NUMBA_NUM_THREADS", text), "expected a whole number of threads >= 1")
     value = int(text)
     if value < 1:
-        raise InputError(_named("NUMBA_NUM_THREADS", text), "must be at least 1 (numba refuses 0)")
+        raise InputError(named_value("NUMBA_NUM_THREADS", text), "must be at least 1 (numba refuses 0)")
     cores = usable_cores()
     if value > cores:  # numba starts them all at its first parallel loop: 1000 under a memory limit abort in libgomp
-        raise InputError(_named("NUMBA_NUM_THREADS", text), f"more threads than the {cores} cores this process may "
+        raise InputError(named_value("NUMBA_NUM_THREADS", text), f"more threads than the {cores} cores this process may "
                          f"use (at most {cores}; more only slows LBP down)")
     return value
 
@@ -151,26 +148,6 @@ def numba_cache_dir() -> Path | None:
     return writable_folder(Path(text).expanduser(), "NUMBA_CACHE_DIR")
 
 
-def run_context() -> dict | None:
-    """``$CRFMAP_RUN`` (the notebook :mod:`crfstudy.repro.run` executes and its parameters), or None if unset.
-
-    >>> os.environ["CRFMAP_RUN"] = '{"notebook": "04_denoising.ipynb", "parameters": {"noise": 0.3}}'
-    >>> run_context()["parameters"]
-    {'noise': 0.3}
-    >>> del os.environ["CRFMAP_RUN"]
-    """
-    text = os.environ.get("CRFMAP_RUN", "")
-    if not text.strip():
-        return None
-    try:
-        run = json.loads(text)
-    except ValueError as exc:
-        raise InputError(_named("CRFMAP_RUN", text), f"not JSON ({exc.msg})") from None
-    notebook, parameters = (run.get("notebook"), run.get("parameters", {})) if isinstance(run, dict) else (0, 0)
-    if not (notebook is None or (isinstance(notebook, str) and "/" not in notebook)) \
-            or not isinstance(parameters, dict):
-        raise InputError(_named("CRFMAP_RUN", text), 'expected {"notebook": "NAME.ipynb", "parameters": {...}}')
-    return {"notebook": notebook, "parameters": parameters}
 
 
 def number(variable, what) -> int | None:
@@ -179,18 +156,6 @@ def number(variable, what) -> int | None:
     return whole_number(variable, text, what) if text.strip() else None
 
 
-def reproduce_started() -> float | None:
-    """``$CRFMAP_REPRODUCE_STARTED``: when ``make reproduce`` started (Unix time), or None when unset or empty."""
-    text = os.environ.get("CRFMAP_REPRODUCE_STARTED", "")
-    if not text.strip():
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value) or value <= 0:
-        raise InputError(_named("CRFMAP_REPRODUCE_STARTED", text), "expected a Unix time in seconds")
-    return value
 
 
 def check(numba_cache_too=True) -> None:
@@ -203,10 +168,7 @@ def check(numba_cache_too=True) -> None:
     if numba_cache_too:
         numba_cache_dir()
     number("CRFMAP_MAX_CELLS", "cells")
-    run_context()
-    reproduce_started()
     folder("CRFMAP_ROOT", must_exist=True)
-    folder("CRFMAP_OUTPUT_ROOT")
     folder("CRFMAP_DATA")
 
 

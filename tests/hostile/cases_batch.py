@@ -171,8 +171,10 @@ _env_case("NUMBA_NUM_THREADS=0-warmup", {"NUMBA_NUM_THREADS": "0"}, ["NUMBA_NUM_
           argv=["--jobs", "1"], subprocess=True)
 _env_case("NUMBA_CACHE_DIR-unwritable", {"NUMBA_CACHE_DIR": "/proc/crfmap-numba"}, ["NUMBA_CACHE_DIR"])
 _env_case("NUMBA_CACHE_DIR-a-file", {"NUMBA_CACHE_DIR": "{d}/in.npy"}, ["NUMBA_CACHE_DIR"])
-for _entry in ("reproduce", "crfmap"):
-    _env_case(f"CRFMAP_OUTPUT_ROOT-empty-{_entry}", {"CRFMAP_OUTPUT_ROOT": ""}, ["CRFMAP_OUTPUT_ROOT"], entry=_entry)
+# the study's variables (crfstudy.repro.variables), checked by each study entry point; the crfmap command ignores them
+_env_case("CRFMAP_OUTPUT_ROOT-empty-reproduce", {"CRFMAP_OUTPUT_ROOT": ""}, ["CRFMAP_OUTPUT_ROOT"], entry="reproduce")
+_env_case("CRFMAP_OUTPUT_ROOT-empty-run", {"CRFMAP_OUTPUT_ROOT": ""}, ["CRFMAP_OUTPUT_ROOT"], entry="run",
+          argv=["nb.ipynb", "--output-root", "{d}/out"])
 _env_case("CRFMAP_OUTPUT_ROOT-blank", {"CRFMAP_OUTPUT_ROOT": "  "}, ["CRFMAP_OUTPUT_ROOT"], entry="reproduce")
 _env_case("CRFMAP_OUTPUT_ROOT-a-file", {"CRFMAP_OUTPUT_ROOT": "{d}/root"}, ["CRFMAP_OUTPUT_ROOT"], entry="reproduce",
           argv=["--quick", "--only", "02", "--dry-run"])
@@ -187,7 +189,8 @@ _env_case("CRFMAP_DATA-a-file", {"CRFMAP_DATA": "{d}/in.npy"}, ["CRFMAP_DATA"], 
 _env_case("CRFMAP_ROOT-empty", {"CRFMAP_ROOT": ""}, ["CRFMAP_ROOT"], entry="reproduce", subprocess=True)
 _env_case("CRFMAP_ROOT-missing", {"CRFMAP_ROOT": "{d}/no-checkout"}, ["CRFMAP_ROOT"], entry="reproduce",
           subprocess=True)
-_env_case("CRFMAP_RUN-not-json", {"CRFMAP_RUN": "{{notebook"}, ["CRFMAP_RUN"])
+_env_case("CRFMAP_RUN-not-json", {"CRFMAP_RUN": "{{notebook"}, ["CRFMAP_RUN"], entry="run",
+          argv=["nb.ipynb", "--output-root", "{d}/out"])
 _env_case("CRFMAP_REPRODUCE_STARTED-not-a-time", {"CRFMAP_REPRODUCE_STARTED": "yesterday"},
           ["CRFMAP_REPRODUCE_STARTED"], entry="reproduce")
 _env_case("CRFMAP_RUN-path-escape", {"CRFMAP_RUN": '{{"notebook": "../../etc/passwd", "parameters": {{}}}}'},

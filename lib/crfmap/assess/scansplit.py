@@ -114,10 +114,6 @@ class ScanSplit:
         """The first half's grid with the thesis's arctan model (as :func:`crfmap.mapping.build_grid`)."""
         return arctan_probability(self.first_hits, self.first_passes)
 
-    def raw_grid(self) -> OccupancyGrid:
-        """:meth:`raw_probability` as an OccupancyGrid with the split's resolution and origin."""
-        return OccupancyGrid(self.raw_probability(), resolution=self.resolution, origin=self.origin)
-
 
 def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress: bool = False) -> ScanSplit:
     """Count the hits of the ``parity`` half (even scans: 0) and of the other half on one grid.

@@ -44,6 +44,7 @@ from crfmap.crf.inference.schedules import SETTINGS
 from crfmap.crf.model.gating import EvidenceGate
 from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
 from crfmap.crf.threads import over_rows
+from crfmap.checks import check_int, check_mask, check_number, check_positive
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
 
@@ -95,19 +96,20 @@ def temper(probability, temperature: float) -> np.ndarray:
     >>> temper(np.array([0.5, 0.9]), 2.0).round(3).tolist()
     [0.5, 0.75]
     """
-    t = _check_temperature(temperature)
+    t = check_positive("temperature", temperature)
     q = np.clip(np.asarray(probability, dtype=np.float64), LOGIT_FLOOR, 1 - LOGIT_FLOOR)
     return 1.0 / (1.0 + np.exp(-(np.log(q) - np.log1p(-q)) / t))
 
 
-def _check_temperature(temperature) -> float:
-    try:
-        t = float(temperature)
-    except (TypeError, ValueError):
-        t = float("nan")
-    if isinstance(temperature, bool) or not (math.isfinite(t) and t > 0):
-        raise InputError("temperature", f"must be a positive number, got {temperature!r}")
-    return t
+def check_margin(margin) -> int | None:
+    """``margin`` [cells]: how far from an observation LBP runs, a whole number >= 0 or None (everywhere).
+
+    >>> check_margin(2.5)
+    Traceback (most recent call last):
+    ...
+    crfmap.errors.InputError: margin: expected an integer, got 2.5
+    """
+    return None if margin is None else check_int("margin", margin, low=0)
 
 
 CACHE_SLOTS = 1024  # a power of two
@@ -171,40 +173,30 @@ class Preset:
     gate: EvidenceGate | None = None  # what each cell's own evidence lets nav2 read (crfmap.crf.model.gating)
 
     def __post_init__(self):
-        from crfmap.checks import check_number
-
-        object.__setattr__(self, "temperature", _check_temperature(self.temperature))
         # the model: every field a number of the kind it is read as (refine would take 2.5 cells or True silently)
-        object.__setattr__(self, "hidden", check_table(self.hidden, "hidden"))
-        object.__setattr__(self, "link", check_table(self.link, "link"))
-        object.__setattr__(self, "pairing", check_pairing(self.pairing))
         if not isinstance(self.scaled, (bool, np.bool_)):
             raise InputError("scaled", f"must be True or False, got {self.scaled!r}")
         for name in ("occupied", "free"):
             pair = getattr(self, name)
             if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
                 raise InputError(name, f"must be two log-odds (first net count, each further one), got {pair!r}")
-            object.__setattr__(self, name, tuple(check_number(name, v, low=0.0) for v in pair))
-        limit = self.limit  # inf is a valid limit (no cap on a cell's log-odds: the ablations' J = 0); NaN is not
-        if not (isinstance(limit, (int, float, np.integer, np.floating)) and not isinstance(limit, (bool, np.bool_))
-                and limit == limit and limit >= 0):
-            raise InputError("limit", f"must be a non-negative number (inf: no cap), got {limit!r}")
-        object.__setattr__(self, "limit", float(limit))
-        if self.margin is not None and (isinstance(self.margin, (bool, np.bool_))
-                                        or not isinstance(self.margin, (int, np.integer)) or self.margin < 0):
-            raise InputError("margin", f"must be None or a non-negative whole number of cells, got {self.margin!r}")
         if self.gate is not None and not isinstance(self.gate, EvidenceGate):
             raise InputError("gate", f"must be None or an EvidenceGate, got {type(self.gate).__name__}")
-        if not (isinstance(self.tol, (int, float)) and not isinstance(self.tol, bool) and math.isfinite(self.tol)
-                and self.tol >= 0):
-            raise InputError("tol", f"must be a non-negative number, got {self.tol!r}")
-        if not (isinstance(self.max_iter, (int, np.integer)) and not isinstance(self.max_iter, bool)
-                and self.max_iter >= 0):
-            raise InputError("max_iter", f"must be a non-negative whole number, got {self.max_iter!r}")
         if self.schedule not in SETTINGS:
             raise InputError("schedule", f"must be one of {', '.join(SETTINGS)}, got {self.schedule!r}")
         if self.dtype not in ("float64", "float32"):
             raise InputError("dtype", f"must be 'float64' or 'float32', got {self.dtype!r}")
+        checked = dict(
+            temperature=check_positive("temperature", self.temperature), hidden=check_table(self.hidden, "hidden"),
+            link=check_table(self.link, "link"), pairing=check_pairing(self.pairing),
+            occupied=tuple(check_number("occupied", v, low=0.0) for v in self.occupied),
+            free=tuple(check_number("free", v, low=0.0) for v in self.free),
+            # inf is a valid limit (no cap on a cell's log-odds: the ablations' J = 0); NaN is not
+            limit=check_number("limit", self.limit, low=0.0, infinite=True),
+            margin=check_margin(self.margin), tol=check_number("tol", self.tol, low=0.0),
+            max_iter=check_int("max_iter", self.max_iter, low=0))
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
 
     def solver(self) -> dict:
         """The solver settings of this preset, as :func:`crfmap.crf.inference.lbp.infer` takes them.
@@ -273,8 +265,6 @@ class Preset:
             g = OccupancyGrid(unary)
         own = region = self.region(observed)
         if within is not None:  # only these cells send messages, as infer's region
-            from crfmap.checks import check_mask
-
             within = check_mask("within", within, g.shape)
             region = within if own is None else own & within
         for key, value in self.solver().items():
@@ -343,7 +333,4 @@ def custom_preset(hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK, pairing="receiver", 
     >>> custom_preset("4,1,1,4", margin=3).coupling.__round__(4), custom_preset().name
     (0.6931, 'custom')
     """
-    if margin is not None and not (isinstance(margin, (int, np.integer)) and margin >= 0):
-        raise InputError("margin", f"must be None or a non-negative whole number of cells, got {margin!r}")
-    return Preset("custom", "given tables", check_table(hidden, "hidden"), scaled=False, margin=margin,
-                  link=check_table(link, "link"), pairing=check_pairing(pairing))
+    return Preset("custom", "given tables", hidden, scaled=False, margin=margin, link=link, pairing=pairing)

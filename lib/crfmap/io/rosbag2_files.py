@@ -2,21 +2,8 @@
 
 rosbags serializes the messages; the files follow ros2/rosbag2's source: ``sqlite_storage.cpp``
 (``rosbag2_storage_default_plugins`` on humble, ``rosbag2_storage_sqlite3`` on jazzy), ``mcap_storage.cpp``,
-``rosbag2_storage/.../metadata_io.cpp``:
-
-========================  =================================  ==========================================
-                          humble                             jazzy
-========================  =================================  ==========================================
-metadata.yaml             version 5: no custom_data,         version 9: QoS as a list,
-                          ros_distro or type hash; QoS as    ``type_description_hash`` per topic,
-                          a YAML string                      ``custom_data``, ``ros_distro: jazzy``
-sqlite3 ``schema``        schema_version 3                   schema_version 4
-sqlite3 ``topics``        no type_description_hash column    type_description_hash (RIHS01)
-sqlite3 other tables      ``metadata`` (left empty)          ``metadata`` (the bag's metadata YAML),
-                                                             ``message_definitions``
-MCAP metadata record      ``rosbag2``: ``ROS_DISTRO``        ``rosbag2``: ``serialized_metadata``
-MCAP channel metadata     offered_qos_profiles               offered_qos_profiles, topic_type_hash
-========================  =================================  ==========================================
+``rosbag2_storage/.../metadata_io.cpp``. What differs between humble and jazzy (metadata version, sqlite3 schema
+and tables, MCAP metadata) is tabled in the README (Use, "Bags"); the constants below and each writer hold it.
 
 MCAP files (``mcap`` library): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time = publish time,
 uncompressed chunks, summary and indexes.

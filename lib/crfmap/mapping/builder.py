@@ -286,6 +286,21 @@ def arctan_probability(occupied_hits, empty_hits):
     return 0.5 + np.arctan(x) / np.pi
 
 
+def logit(p, name) -> float:
+    """``log(p / (1 - p))`` of a probability ``p`` strictly between 0 and 1 (InputError naming ``name``)."""
+    if not (isinstance(p, (int, float, np.floating)) and 0.0 < float(p) < 1.0):
+        raise InputError(name, f"must be a probability strictly between 0 and 1, got {p!r}")
+    return math.log(float(p) / (1.0 - float(p)))
+
+
+def hit_miss_logodds(p_hit, p_miss) -> tuple:
+    """The log-odds a hit and a pass add, checked: probabilities with ``p_hit > 0.5 > p_miss``."""
+    l_hit, l_miss = logit(p_hit, "p_hit"), logit(p_miss, "p_miss")
+    if not (l_hit > 0 > l_miss):
+        raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
+    return l_hit, l_miss
+
+
 def logodds_to_probability(logodds):
     """``P = 1 - 1 / (1 + exp(l))`` (Probabilistic Robotics eq. 9.8), without overflow."""
     return 0.5 * (1.0 + np.tanh(0.5 * np.asarray(logodds, np.float64)))
@@ -317,16 +332,10 @@ def build_grid(scans, resolution, model="arctan", bounds=None, free_on_no_return
         probability = arctan_probability(occupied, empty)
         probability[(occupied == 0) & (empty == 0)] = UNKNOWN
     else:
-        for name, p in (("p_hit", p_hit), ("p_miss", p_miss)):
-            if not (isinstance(p, (int, float, np.floating)) and 0.0 < float(p) < 1.0):
-                raise InputError(name, f"must be a probability strictly between 0 and 1, got {p!r}")
-        if not (float(p_hit) > 0.5 > float(p_miss)):
-            raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
+        l_hit, l_miss = hit_miss_logodds(p_hit, p_miss)
         limit = float(logodds_limit)
         if not limit > 0:
             raise InputError("logodds_limit", f"must be positive (inf for no clamping), got {logodds_limit!r}")
-        l_hit = math.log(p_hit / (1.0 - p_hit))
-        l_miss = math.log(p_miss / (1.0 - p_miss))
         shape = (g["height"], g["width"])
         logodds = np.zeros(shape)
         hit_stamp = np.full(shape, -1, dtype=np.int64)

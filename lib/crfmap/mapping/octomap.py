@@ -35,7 +35,7 @@ from numba import njit
 from crfmap.errors import InputError
 from crfmap.grid import UNKNOWN, OccupancyGrid
 from crfmap.mapping._beam_kernels import _HIT, _SKIP, _classify
-from crfmap.mapping.builder import _geometry, sensor_probe
+from crfmap.mapping.builder import _geometry, hit_miss_logodds, logit, sensor_probe
 
 # OctoMap's defaults (octomap/src/AbstractOccupancyOcTree.cpp)
 P_HIT = 0.7
@@ -135,18 +135,10 @@ def _octomap_update(ranges, angles, poses, range_min, range_max, max_is_no_retur
     return used
 
 
-def _logit(p, name):
-    if not (isinstance(p, (int, float, np.floating)) and 0.0 < float(p) < 1.0):
-        raise InputError(name, f"must be a probability strictly between 0 and 1, got {p!r}")
-    return math.log(float(p) / (1.0 - float(p)))
-
-
 def _logodds_params(p_hit, p_miss, clamp_min, clamp_max) -> tuple:
     """The float32 log-odds (hit, miss, lower clamp, upper clamp) of the four probabilities, checked."""
-    l_hit, l_miss = _logit(p_hit, "p_hit"), _logit(p_miss, "p_miss")
-    l_min, l_max = _logit(clamp_min, "clamp_min"), _logit(clamp_max, "clamp_max")
-    if not (l_hit > 0 > l_miss):
-        raise InputError("p_hit/p_miss", f"need p_hit > 0.5 > p_miss, got {p_hit!r} and {p_miss!r}")
+    l_hit, l_miss = hit_miss_logodds(p_hit, p_miss)
+    l_min, l_max = logit(clamp_min, "clamp_min"), logit(clamp_max, "clamp_max")
     if not (l_min < 0 < l_max):
         raise InputError("clamp_min/clamp_max", f"need clamp_min < 0.5 < clamp_max, got {clamp_min!r} and {clamp_max!r}")
     return tuple(np.float32(v) for v in (l_hit, l_miss, l_min, l_max))
@@ -156,21 +148,12 @@ def octomap_grid(scans, resolution, bounds=None, p_hit=P_HIT, p_miss=P_MISS, cla
                  clamp_max=CLAMP_MAX, free_on_no_return=False, max_range_is_no_return=True) -> OccupancyGrid:
     """Occupancy grid of OctoMap's clamped log-odds update on :func:`crfmap.mapping.build_grid`'s grid: ``sigmoid(l)``
     where a cell was updated, 0.5 elsewhere."""
-    params = _logodds_params(p_hit, p_miss, clamp_min, clamp_max)
     g = _geometry(scans, resolution, bounds, free_on_no_return, max_range_is_no_return)
-    shape = (g["height"], g["width"])
-    logodds = np.zeros(shape, np.float32)
-    hit_stamp = np.full(shape, -1, np.int64)
-    miss_stamp = np.full(shape, -1, np.int64)
-    buf = np.empty((2 * (g["width"] + g["height"]) + 4, 2), np.int64)
-    used = _octomap_update(g["ranges"], g["angles"], g["poses"], g["range_min"], g["range_max"], g["max_is_no_return"],
-                           g["free_range"], g["origin_x"], g["origin_y"], g["resolution"], *params, logodds, hit_stamp,
-                           miss_stamp, 0, buf)
-    probability = 1.0 / (1.0 + np.exp(-logodds.astype(np.float64)))
-    probability[(hit_stamp < 0) & (miss_stamp < 0)] = UNKNOWN
-    meta = {"model": "octomap", "scans": len(g["ranges"]), "beams_used": int(used), "p_hit": float(p_hit),
+    octomap = OctoMapUpdater(g, p_hit, p_miss, clamp_min, clamp_max)
+    used = octomap.update(g["ranges"], g["poses"])
+    meta = {"model": "octomap", "scans": octomap.scans, "beams_used": int(used), "p_hit": float(p_hit),
             "p_miss": float(p_miss), "clamp_min": float(clamp_min), "clamp_max": float(clamp_max)}
-    return OccupancyGrid(probability, resolution=g["resolution"], origin=(g["origin_x"], g["origin_y"], 0.0),
+    return OccupancyGrid(octomap.probability(), resolution=octomap.resolution, origin=octomap.origin,
                          frame_id=getattr(scans, "frame_id", "map") or "map", meta=meta)
 
 
@@ -215,11 +198,17 @@ class OctoMapUpdater:
         u, v = (pose[0] - self.origin[0]) / self.resolution, (pose[1] - self.origin[1]) / self.resolution
         if not (0 <= u < self.width and 0 <= v < self.height):
             raise InputError("laser_pose", f"({pose[0]:.3f}, {pose[1]:.3f}) m lies outside the grid")
+        self.update(r.astype(np.float32, copy=False)[None, :], pose[None, :])
+
+    def update(self, ranges, laser_poses) -> int:
+        """Update with scans ``ranges`` [scan, beam] (float32) at ``laser_poses`` [scan, (x, y, yaw)], checked by the
+        caller; returns the beams used."""
         range_min, range_max, max_is_no_return, free_range = self._sensor
-        _octomap_update(r.astype(np.float32, copy=False)[None, :], self.angles, pose[None, :], range_min, range_max,
-                        max_is_no_return, free_range, self.origin[0], self.origin[1], self.resolution,
-                        *self._logodds_params, self.logodds, self._hit_stamp, self._miss_stamp, self.scans, self._buf)
-        self.scans += 1
+        used = _octomap_update(ranges, self.angles, laser_poses, range_min, range_max, max_is_no_return, free_range,
+                               self.origin[0], self.origin[1], self.resolution, *self._logodds_params, self.logodds,
+                               self._hit_stamp, self._miss_stamp, self.scans, self._buf)
+        self.scans += len(ranges)
+        return used
 
     def probability(self) -> np.ndarray:
         """P(occupied) [y, x]: ``sigmoid(l)`` where a cell was updated, 0.5 elsewhere."""

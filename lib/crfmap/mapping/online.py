@@ -32,7 +32,7 @@ from crfmap.checks import check_number
 from crfmap.crf.engine.incremental import IncrementalLBP
 from crfmap.crf.inference.regions import near_cells
 from crfmap.crf.inference.result import LBPResult
-from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK, check_pairing, check_table
+from crfmap.crf.model.potentials import DEFAULT_HIDDEN, DEFAULT_LINK
 from crfmap.crf.presets import DEFAULT_PRESET, Preset, custom_preset, get_preset
 from crfmap.errors import InputError
 from crfmap.grid import OccupancyGrid
@@ -58,20 +58,15 @@ def mapper_preset(preset=None, hidden=None, link=None, pairing=None, margin=PRES
     if tables and preset is not None:
         raise InputError("preset", "hidden/link/pairing make a custom preset of their own: give them or a preset")
     if tables:
-        chosen = custom_preset(DEFAULT_HIDDEN if hidden is None else check_table(hidden, "hidden"),
-                               DEFAULT_LINK if link is None else check_table(link, "link"),
-                               check_pairing("receiver" if pairing is None else pairing))
+        chosen = custom_preset(DEFAULT_HIDDEN if hidden is None else hidden, DEFAULT_LINK if link is None else link,
+                               "receiver" if pairing is None else pairing)
     elif isinstance(preset, Preset):
         chosen = preset
     else:
         chosen = get_preset(DEFAULT_PRESET if preset is None else preset)
     if isinstance(margin, str) and margin == PRESET_MARGIN:
         return chosen
-    if margin is not None and not (isinstance(margin, (int, np.integer)) and not isinstance(margin, bool)
-                                   and margin >= 0):
-        raise InputError("margin", f"must be None, {PRESET_MARGIN!r} or a non-negative whole number of cells, "
-                                   f"got {margin!r}")
-    return replace(chosen, margin=None if margin is None else int(margin))
+    return replace(chosen, margin=margin)  # the preset checks it
 
 
 @dataclass

@@ -22,11 +22,11 @@ import time
 from importlib import metadata
 from pathlib import Path
 
-from crfmap import environment
 from crfmap.data import data_root
 from crfstudy import paths
 from crfstudy.repro.report import markdown_table
 from crfstudy.repro.timings import slowest_cells_table
+from crfstudy.repro.variables import reproduce_started
 
 # The data files the notebooks read (folders: every file inside), where each came from.
 DATA_ORIGINS = {
@@ -148,7 +148,7 @@ def describe(data: bool = True) -> dict:
                                      [[name, kb, _grouped(digest)] for name, kb, digest, _ in data_files()]
                                      ).rstrip("\n") if data else "",
         "seeds": "; ".join(f"{notebook}: {seeds}" for notebook, seeds in notebook_seeds()),
-        "wall": wall_sentence(wall, started=environment.reproduce_started()),
+        "wall": wall_sentence(wall, started=reproduce_started()),
         "slowest_cells": slowest_cells_table(paths.OUT / "notebooks").rstrip("\n"),
     }
 

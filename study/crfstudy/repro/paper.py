@@ -39,11 +39,11 @@ import time
 import argparse
 
 from crfstudy import paths
-from crfmap import environment
 from crfmap.crf.presets import DEFAULT_PRESET
 from crfmap.errors import CrfmapError, InputError, one_line
 from crfmap.io.atomic import atomic_path
 from crfstudy.repro import provenance
+from crfstudy.repro.variables import reproduce_started
 
 COMMENT = re.compile(r"<!--.*?-->\n?", re.S)
 PLACEHOLDER = re.compile(r"\{\{(table|figure|number|build|missed):([^}|]+)(?:\|([^}]*))?\}\}")
@@ -106,7 +106,7 @@ def this_run_row(cells: list, seconds: float | None, what: str) -> list:
 def this_run_seconds(notebook_seconds: float | None = None) -> tuple:
     """(seconds, what) of this reproduction when the paper is built: the time since ``make reproduce`` started
     (``$CRFMAP_REPRODUCE_STARTED``, set by make), else the executed notebooks' summed run times, else (None, "")."""
-    started = environment.reproduce_started()
+    started = reproduce_started()
     if started is not None:
         return time.time() - started, "from its start to this report (venv, warm-up, notebooks)"
     if notebook_seconds:

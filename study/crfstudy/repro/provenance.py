@@ -20,9 +20,9 @@ import os
 import sys
 from pathlib import Path
 
-from crfmap import environment
 from crfstudy import paths
 from crfstudy.repro.dependencies import parameter_defaults
+from crfstudy.repro.variables import run_context
 
 KEY = "_provenance"  # in JSON results
 PNG_KEY = "crfmap-provenance"  # PNG text chunk
@@ -49,7 +49,7 @@ def current() -> dict:
     ['notebook', 'parameters', 'quick']
     """
     namespace = vars(sys.modules.get("__main__", object()))
-    given = environment.run_context()
+    given = run_context()
     if given:
         notebook, overrides = given["notebook"], dict(given["parameters"])
     else:

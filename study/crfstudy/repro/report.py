@@ -16,15 +16,14 @@ import numpy as np
 
 from crfstudy import paths
 from crfmap.io.atomic import atomic_path
-from crfmap import environment
-from crfstudy.repro import provenance, warmup
+from crfstudy.repro import provenance, variables, warmup
 
 
 def start_notebook() -> None:
-    """A notebook's first call: check the environment (:func:`crfmap.environment.prepare`) and, in a Jupyter
+    """A notebook's first call: check the environment (:func:`crfstudy.repro.variables.prepare`) and, in a Jupyter
     kernel whose numba cache is cold, compile the kernels now, with a message (:func:`warmup.announce_if_cold`),
     so the pause happens where the message is, not on a silent later cell."""
-    environment.prepare()
+    variables.prepare()
     warmup.announce_if_cold()
 
 

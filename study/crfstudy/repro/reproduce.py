@@ -26,6 +26,7 @@ import json
 from crfstudy import paths
 from crfmap.data import data_file
 from crfmap.errors import CrfmapError, DataMissingError, one_line
+from crfstudy.repro import variables
 from crfstudy.repro.dependencies import data_needed, notebooks
 from crfmap.environment import whole_number
 from crfmap import environment
@@ -125,7 +126,7 @@ def _cores(text) -> int:
 
 
 def _reproduce(args) -> int:
-    environment.prepare()  # before snakemake's jobs import numba, which reads NUMBA_NUM_THREADS once
+    variables.prepare()  # before snakemake's jobs import numba, which reads NUMBA_NUM_THREADS once
     todo = [] if args.sweep and not args.only else notebooks(args.only)
     loaded = []
     if args.sweep:
@@ -179,7 +180,7 @@ def _reproduce(args) -> int:
 
 def estimate(sweep, cores) -> str:
     """What a sweep will run and about how long it takes (each point as long as the notebook's last full run)."""
-    # here, not at the top: timings imports numba, which must come after environment.prepare() (NUMBA_NUM_THREADS)
+    # here, not at the top: timings imports numba, which must come after variables.prepare() (NUMBA_NUM_THREADS)
     from crfstudy.repro.timings import BENCHMARKS, describe, expected_seconds
 
     points = len(sweep.points())
@@ -200,7 +201,7 @@ def write_wall_record(workflow_seconds, started_at=None, cores=2, path=None, new
     top-level fields are the last run's; ``runs`` lists every run recorded there, oldest first, so a
     fresh clone's first run (``new_venv``) stays on record after quick reruns.
     """
-    from crfstudy.repro.buildinfo import wall_record  # imports numba: after environment.prepare(), as timings
+    from crfstudy.repro.buildinfo import wall_record  # imports numba: after variables.prepare(), as timings
 
     path = Path(path or paths.OUT / "logs" / "reproduce_wall.json")
     now = time.time()

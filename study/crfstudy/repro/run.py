@@ -22,7 +22,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from crfmap import environment
+from crfstudy.repro import variables
 from crfmap.errors import CrfmapError
 
 
@@ -84,7 +84,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     try:  # the kernel inherits the environment: its numba reads NUMBA_NUM_THREADS once, at import
-        environment.prepare()
+        variables.prepare()
     except CrfmapError as exc:
         print(f"run: error: {exc}", file=sys.stderr)
         return 2

@@ -380,11 +380,11 @@ def main(argv=None) -> int:
     if args.worker is not None:
         print(json.dumps(run_tasks(args.worker)))
         return 0
-    from crfmap import environment
+    from crfstudy.repro import variables
     from crfmap.errors import CrfmapError
 
     try:  # `make reproduce` and `make test` start here: a bad NUMBA_NUM_THREADS is named before numba fails on it
-        environment.prepare()
+        variables.prepare()
     except CrfmapError as exc:
         print(f"warmup: error: {exc}", file=sys.stderr)
         return 2
