@@ -33,7 +33,7 @@ from crfmap.frames import compose
 from crfmap.mapping import build_grid
 from crfmap.raycast import bresenham_step, first_hit_kernel
 from crfmap.recording import ScanSet
-from crfstudy.plotting import show_grid
+from crfstudy.plotting import imshow_extent, show_grid
 
 __all__ = ["builder_table", "build_summary", "cells_until_hit", "discretisation_figure",
            "discretisation_share", "end_points", "first_hit", "in_occupied_cell", "line_cells", "motion_figure",
@@ -199,8 +199,8 @@ def scan_figure(truth, pose, ends, hit, range_max: float, title: str):
                 arrowprops=dict(arrowstyle="-|>", color="C2", lw=2))
     ax.plot([], [], color="C0", lw=0.6, alpha=0.5, label="no return (+inf)")
     ax.legend(loc="lower right", fontsize="small")
-    ax.set_xlim(truth.imshow_extent()[:2])
-    ax.set_ylim(truth.imshow_extent()[2:])
+    ax.set_xlim(imshow_extent(truth)[:2])
+    ax.set_ylim(imshow_extent(truth)[2:])
     return fig
 
 
