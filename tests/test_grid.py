@@ -27,10 +27,9 @@ def test_row_zero_is_lowest_y():
     assert g.cell_to_world(0, 0)[1] < g.cell_to_world(0, 2)[1]
 
 
-def test_bounds_and_imshow_extent_are_the_same_rectangle_in_two_orders():
+def test_bounds_of_a_grid_at_yaw_zero():
     g = OccupancyGrid(np.full((3, 4), 0.5), resolution=0.25, origin=(-1.0, 2.0, 0.0))
     assert g.bounds() == (-1.0, 2.0, 0.0, 2.75)  # xmin, ymin, xmax, ymax
-    assert g.imshow_extent() == (-1.0, 0.0, 2.0, 2.75)  # left, right, bottom, top
 
 
 def test_bounds_of_a_rotated_grid_hold_every_cell_centre():

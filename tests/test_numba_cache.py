@@ -16,8 +16,8 @@ from pathlib import Path
 
 import crfmap
 
-CALL = ("import os, crfmap; crfmap.prepare(); import crfmap.raycast as r; print(r._line_length(0, 0, 3, 4)); "
-        "print(os.environ.get('NUMBA_CACHE_DIR', '-'))")
+CALL = ("import os, numpy, crfmap; crfmap.prepare(); import crfmap.raycast as r; "
+        "print(r.bresenham_step(0, 0, 3, 4, numpy.empty((5, 2), numpy.int64))); print(os.environ.get('NUMBA_CACHE_DIR', '-'))")
 
 
 def _read_only_install(tmp_path, with_fallback=True):

@@ -136,15 +136,6 @@ class OccupancyGrid:
         x, y = ox + c * u - s * v, oy + s * u + c * v
         return (float(x.min()), float(y.min()), float(x.max()), float(y.max()))
 
-    def imshow_extent(self):
-        """(left, right, bottom, top) [m], matplotlib's ``imshow(..., extent=..., origin='lower')`` (yaw 0).
-
-        >>> OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)).imshow_extent()
-        (1.0, 2.5, 2.0, 3.0)
-        """
-        xmin, ymin, xmax, ymax = self.bounds()
-        return (xmin, xmax, ymin, ymax)
-
     # --- nav_msgs/OccupancyGrid values -------------------------------------------
     def to_int8(self) -> np.ndarray:
         """nav_msgs/OccupancyGrid data as a [y, x] int8 array: -1 unknown (P exactly 0.5), else 0..100."""

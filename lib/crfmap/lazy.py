@@ -21,3 +21,13 @@ def attach(package: str, api: dict) -> tuple:
     for name, module in api.items():
         names_of.setdefault(module, []).append(name)
     return lazy_loader.attach(package, submod_attrs=names_of)
+
+
+def api_listing(package: str, api: dict) -> str:
+    """The end of ``package``'s docstring: its public API ``api``, one line a name with the module defining it.
+
+    >>> print(api_listing("crfmap.crf", {"infer": "inference.lbp"}), end="")
+    <BLANKLINE>
+    - ``infer`` (:mod:`crfmap.crf.inference.lbp`)
+    """
+    return "\n" + "\n".join(f"- ``{name}`` (:mod:`{package}.{module}`)" for name, module in api.items()) + "\n"

@@ -27,6 +27,16 @@ COLORBAR_LABEL = "P(occupied)"
 _DOWNSAMPLE_CELLS = 400
 
 
+def imshow_extent(grid: OccupancyGrid) -> tuple:
+    """(left, right, bottom, top) [m] of ``grid``, matplotlib's ``imshow(..., extent=..., origin='lower')`` (yaw 0).
+
+    >>> imshow_extent(OccupancyGrid(np.zeros((2, 3)), 0.5, origin=(1.0, 2.0, 0.0)))
+    (1.0, 2.5, 2.0, 3.0)
+    """
+    xmin, ymin, xmax, ymax = grid.bounds()
+    return (xmin, xmax, ymin, ymax)
+
+
 def display_pool(p, k: int) -> np.ndarray:
     """Shrink a grid k-fold for display only, so thin walls survive at page size.
 
@@ -60,7 +70,7 @@ def show_grid(ax, grid, title: str = "", cells: bool = False, colorbar: bool = T
     """
     if isinstance(grid, OccupancyGrid):
         data = grid.probability
-        extent = None if cells else grid.imshow_extent()
+        extent = None if cells else imshow_extent(grid)
         resolution = grid.resolution
     else:
         data = np.asarray(grid)

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from crfmap.assess.calibration import (apply_temperature, expected_calibration_error, fit_temperature, reliability,
-                                       split_calibration)
+from crfmap.assess.calibration import expected_calibration_error, fit_temperature, reliability, split_calibration
 from crfmap.assess.scansplit import ScanSplit
+from crfmap.crf.presets import temper
 from crfmap.errors import InputError
 
 
@@ -25,21 +25,21 @@ def test_calibrated_predictions_have_small_ece():
     p = rng.uniform(0, 1, 200_000)
     y = rng.uniform(0, 1, p.size) < p
     assert expected_calibration_error(p, y) < 0.01
-    assert expected_calibration_error(apply_temperature(p, 0.3), y) > 0.1  # sharpened: over-confident
+    assert expected_calibration_error(temper(p, 0.3), y) > 0.1  # sharpened: over-confident
 
 
 def test_temperature_recovers_a_known_softening():
     rng = np.random.default_rng(2)
     true = rng.uniform(0.02, 0.98, 100_000)
     y = (rng.uniform(0, 1, true.size) < true).astype(float)
-    over = apply_temperature(true, 0.5)  # an over-confident map: the right correction is T = 2
+    over = temper(true, 0.5)  # an over-confident map: the right correction is T = 2
     t = fit_temperature(over, y)
     grid = np.exp(np.linspace(np.log(0.5), np.log(8), 400))
-    losses = [np.mean(-(y * np.log(apply_temperature(over, g)) + (1 - y) * np.log(1 - apply_temperature(over, g))))
+    losses = [np.mean(-(y * np.log(temper(over, g)) + (1 - y) * np.log(1 - temper(over, g))))
               for g in grid]
     assert t == pytest.approx(grid[int(np.argmin(losses))], rel=0.01)
     assert t == pytest.approx(2.0, rel=0.05)
-    assert apply_temperature(np.array([0.5]), 3.0)[0] == 0.5
+    assert temper(np.array([0.5]), 3.0)[0] == 0.5
 
 
 def test_split_calibration_and_errors():
@@ -49,7 +49,7 @@ def test_split_calibration_and_errors():
     with pytest.raises(InputError, match="probabilities"):
         reliability(np.array([1.5]), np.array([1]))
     with pytest.raises(InputError, match="temperature"):
-        apply_temperature(np.array([0.2]), 0)
+        temper(np.array([0.2]), 0)
     with pytest.raises(InputError, match="shape"):
         split_calibration(sp, {"bad": np.zeros((2, 2))})
 

@@ -7,7 +7,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from crfmap.grid import OccupancyGrid  # noqa: E402
-from crfstudy.plotting import OCCUPANCY_CMAP, plot_roc, shared_colorbar, show_grid  # noqa: E402
+from crfstudy.plotting import OCCUPANCY_CMAP, imshow_extent, plot_roc, shared_colorbar, show_grid  # noqa: E402
 
 
 def _boxes_overlap(a, b) -> bool:
@@ -61,3 +61,9 @@ def test_coinciding_roc_curves_stay_visible():
     assert first.get_linestyle() != second.get_linestyle() and second.get_linewidth() < first.get_linewidth()
     assert second.get_zorder() > first.get_zorder()
     plt.close(fig)
+
+
+def test_imshow_extent_is_the_grids_bounds_in_matplotlibs_order():
+    g = OccupancyGrid(np.full((3, 4), 0.5), resolution=0.25, origin=(-1.0, 2.0, 0.0))
+    assert g.bounds() == (-1.0, 2.0, 0.0, 2.75)  # xmin, ymin, xmax, ymax
+    assert imshow_extent(g) == (-1.0, 0.0, 2.0, 2.75)  # left, right, bottom, top

@@ -2,20 +2,10 @@
 and peers as rows, navigation and localisation, learning.
 
 Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
-
-- :mod:`crfmap.assess.metrics`: ``evaluate``, ``Report``, ``mse``, ``confusion``, ``roc_curve``, ``auc``
-- :mod:`crfmap.assess.scansplit`: ``scan_split``, ``ScanSplit``, ``score`` (validation on scans the map never saw)
-- :mod:`crfmap.assess.baselines`: ``all_baselines``, ``window_mean``, ``window_median``, ``grey_closing``, ``graph_cut``
-- :mod:`crfmap.assess.navigation`: ``nav_scores``, ``nav2_classes``, ``wall_shape`` (the map as nav2 reads the written trinary file, scored on a scan split)
-- :mod:`crfmap.assess.localisation`: ``localise``, ``compare_localisation`` (maps scored by nav2_amcl's likelihood field on held-out scans)
-- :mod:`crfmap.assess.likelihood_field`: ``LaserModel``, ``LikelihoodField`` (nav2_amcl's laser model, as nav2 computes it)
-- :mod:`crfmap.assess.comparison`: ``compare``, ``method_names`` (every evaluated row of a scan split)
-- :mod:`crfmap.assess.calibration`: ``fit_temperature`` (one temperature for a model's log-odds)
-- :mod:`crfmap.assess.learning`: ``learn_thesis``, ``learn_gradient``, ``learn_pseudolikelihood``, ``LearningResult``, ``lbp_mse``, ``rescale``
 """
 from __future__ import annotations
 
-from crfmap.lazy import attach
+from crfmap.lazy import api_listing, attach
 
 _API = {
     "evaluate": "metrics",
@@ -50,3 +40,4 @@ _API = {
     "fit_temperature": "calibration",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)
+__doc__ += api_listing(__name__, _API)

@@ -57,36 +57,28 @@ def expected_calibration_error(p, labels, bins: int = DEFAULT_BINS) -> float:
     return float(np.sum(r["count"][used] * np.abs(r["mean_p"][used] - r["share"][used])) / r["count"].sum())
 
 
-def apply_temperature(p, temperature: float) -> np.ndarray:
-    """``sigmoid(logit(P) / T)``: :func:`crfmap.crf.presets.temper`, what a preset's ``temperature`` does.
-
-    >>> apply_temperature(np.array([0.5, 0.9]), 2.0).round(3).tolist()
-    [0.5, 0.75]
-    """
-    return temper(p, temperature)
-
-
 def _logloss(p, y):
     q = np.clip(p, LOGIT_FLOOR, 1 - LOGIT_FLOOR)
     return float(-np.mean(y * np.log(q) + (1 - y) * np.log(1 - q)))
 
 
 def fit_temperature(p, labels, tol: float = 1e-4) -> float:
-    """The T in :data:`TEMPERATURE_RANGE` minimising the log-loss of :func:`apply_temperature` (golden section on log T)."""
+    """The T in :data:`TEMPERATURE_RANGE` minimising the log-loss of :func:`crfmap.crf.presets.temper` (what a preset's
+    ``temperature`` does: ``sigmoid(logit(P) / T)``), by golden section on log T."""
     p, y = _check(p, labels, 1)
     lo, hi = math.log(TEMPERATURE_RANGE[0]), math.log(TEMPERATURE_RANGE[1])
     g = (math.sqrt(5) - 1) / 2
     a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-    fa, fb = _logloss(apply_temperature(p, math.exp(a)), y), _logloss(apply_temperature(p, math.exp(b)), y)
+    fa, fb = _logloss(temper(p, math.exp(a)), y), _logloss(temper(p, math.exp(b)), y)
     while hi - lo > tol:
         if fa <= fb:
             hi, b, fb = b, a, fa
             a = hi - g * (hi - lo)
-            fa = _logloss(apply_temperature(p, math.exp(a)), y)
+            fa = _logloss(temper(p, math.exp(a)), y)
         else:
             lo, a, fa = a, b, fb
             b = lo + g * (hi - lo)
-            fb = _logloss(apply_temperature(p, math.exp(b)), y)
+            fb = _logloss(temper(p, math.exp(b)), y)
     return float(math.exp((lo + hi) / 2))
 
 

@@ -24,7 +24,7 @@ Public API (imported on first use, so ``import crfmap.crf`` stays cheap):
 """
 from __future__ import annotations
 
-from crfmap.lazy import attach
+from crfmap.lazy import api_listing, attach
 
 _API = {
     "DEFAULT_HIDDEN": "model.potentials",
@@ -57,4 +57,4 @@ _API = {
     "IncrementalLBP": "engine.incremental",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)
-__doc__ += "\n".join(f"- ``{name}`` (:mod:`crfmap.crf.{module}`)" for name, module in _API.items()) + "\n"
+__doc__ += api_listing(__name__, _API)

@@ -1,13 +1,10 @@
 """From scans to an occupancy grid: the thesis's arctan builder, the log-odds baseline, and the online mapper.
 
 Public API (imported on first use, so ``import crfmap.mapping`` stays cheap):
-
-- :mod:`crfmap.mapping.builder`: ``build_grid``, ``count_hits``, ``HitCounter``, ``scan_bounds``, ``arctan_probability``, ``logodds_to_probability``
-- :mod:`crfmap.mapping.online`: ``OnlineMapper``, ``ScanUpdate``
 """
 from __future__ import annotations
 
-from crfmap.lazy import attach
+from crfmap.lazy import api_listing, attach
 
 _API = {
     "build_grid": "builder",
@@ -20,3 +17,4 @@ _API = {
     "ScanUpdate": "online",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)
+__doc__ += api_listing(__name__, _API)

@@ -1,15 +1,10 @@
 """Simulated sensing: the laser, how the robot drives, and the simulator that records scans of a scene.
 
 Public API (imported on first use, so ``import crfmap.sim`` stays cheap):
-
-- :mod:`crfmap.sim.laser`: ``Laser``, ``LEGACY_NO_RETURN``
-- :mod:`crfmap.sim.motion`: ``Motion``, ``explore_reachable``, ``look_around``, ``follow_waypoints``
-- :mod:`crfmap.sim.drives`: ``Explore``, ``Look``, ``Waypoints``, ``drive_for``
-- :mod:`crfmap.sim.simulator`: ``simulate``, ``cast_rays``, ``add_range_noise``
 """
 from __future__ import annotations
 
-from crfmap.lazy import attach
+from crfmap.lazy import api_listing, attach
 
 _API = {
     "Laser": "laser",
@@ -27,3 +22,4 @@ _API = {
     "add_range_noise": "simulator",
 }
 __getattr__, __dir__, __all__ = attach(__name__, _API)
+__doc__ += api_listing(__name__, _API)

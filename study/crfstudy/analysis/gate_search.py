@@ -84,7 +84,7 @@ def search(splits, couplings=COUPLINGS, priors=PRIORS, gate=None) -> list:
             wll, brier = [], []
             for key, s in splits.items():
                 # the beliefs the preset reports (the prior, not the gate's nav2 decision): probabilities to score
-                q = g.calibrate(beliefs[key].beliefs.probability, hits=s.first_hits, passes=s.first_passes)
+                q = g.beliefs_and_map(beliefs[key].beliefs.probability, hits=s.first_hits, passes=s.first_passes)[0]
                 mask = s.group("all")
                 b = float(np.mean((q[mask] - s.labels()[mask]) ** 2))
                 row[f"brier_{key[0]}_{key[1]}"] = b

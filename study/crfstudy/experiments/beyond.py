@@ -37,9 +37,10 @@ from crfstudy.analysis.peer_search import HILBERT_SEARCH_COLUMNS, HILBERT_SEARCH
 from crfstudy.plotting import OCCUPANCY_CMAP, shared_colorbar, show_grid
 from crfmap import DataMissingError
 from crfmap.assess import compare, scan_split, score
-from crfmap.assess.calibration import apply_temperature, split_calibration
+from crfmap.assess.calibration import split_calibration
 from crfmap.assess.peers import OCTOMAP_INTEL, hilbert_row, peer_rows
 from crfmap.crf import DEFAULT_PRESET, get_preset, infer, table_coupling
+from crfmap.crf.presets import temper
 from crfmap.data import data_file
 from crfmap.io import atomic_path, load_recording
 from crfmap.mapping import build_grid, hilbert
@@ -129,7 +130,7 @@ def score_all(split, predictions, n_boot, block, seed, temperature=None):
     preset), calibration of every scored row, and (given T) the tempered analysed model ``<ANALYSED>-T``."""
     preds = {n: p for n, p in predictions.items() if n in TABLE_ROWS}
     if temperature is not None:
-        preds[f"{ANALYSED}-T"] = apply_temperature(preds[ANALYSED], temperature)
+        preds[f"{ANALYSED}-T"] = temper(preds[ANALYSED], temperature)
     versus = {ref: score(split, preds, n_boot=n_boot, block=block, seed=seed, reference=ref)
               for ref in PRESET_ROWS if ref in preds}
     calib = split_calibration(split, preds)  # every row: the baselines as well as the presets and the peers

@@ -144,12 +144,14 @@ def run_figure(scene, runs, title=""):
     """
     import matplotlib.pyplot as plt
 
+    from crfstudy.plotting import imshow_extent
+
     panels = len(runs) + 1
     ncols = min(3, panels)
     nrows = -(-panels // ncols)
     fig, axes = plt.subplots(nrows, ncols, figsize=(3.4 * ncols, 3.1 * nrows), squeeze=False, layout="constrained")
     axes = axes.flat
-    extent = scene.truth.imshow_extent()
+    extent = imshow_extent(scene.truth)
     axes[0].imshow(scene.truth.probability, origin="lower", cmap="gray_r", extent=extent, vmin=0, vmax=1)
     for kind, run in runs.items():
         axes[0].plot(run.path[:, 0], run.path[:, 1], lw=0.8, label=kind)

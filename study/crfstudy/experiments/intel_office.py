@@ -22,7 +22,7 @@ from crfstudy.analysis.crossval import (block_folds, cross_validate, leave_one_o
 from crfstudy.analysis.samecells import block_scores, fold_scores
 from crfstudy.experiments.office_online import (default_table_drift, map_online, near_versus_offline, online_numbers,
                                                 versus_offline)
-from crfstudy.plotting import plot_roc, show_grid
+from crfstudy.plotting import imshow_extent, plot_roc, show_grid
 
 LBP = "LBP, to convergence"  # the predictors' names, as Table 26's rows and the paper's numbers read them
 LBP_THESIS = "LBP, thesis schedule, 2 iterations"
@@ -253,7 +253,7 @@ def online_figure(stream, snapshot_at, snapshots: dict, snapshots_near: dict, ra
             ax.title.set_fontsize(10)
             ax.plot(*stream.laser_poses[:n, :2].T, color="C3", lw=0.6)
             _mark_robot(ax, pose, radius)
-            left, right, bottom, top = grid.imshow_extent()
+            left, right, bottom, top = imshow_extent(grid)
             ax.set_xlim(left, right)  # the disc may reach past the grid; keep the grid's frame
             ax.set_ylim(bottom, top)
     fig.suptitle(f"Online mapping of the Intel log: beliefs while mapping (default tables, LBP within "

@@ -4,13 +4,15 @@ The notebook makes the scans (``simulate``), the grids (``build_grid``) and read
 (``read_carmen``, ``read_bag``); this module holds the study machinery around those calls:
 
 - ray casting cell by cell (:func:`cells_until_hit`, :func:`ray_paths`, :func:`tie_rule_paths`,
-  :func:`tie_rule_count`), on ``crfmap.raycast.line_cells`` (Listing 1's Bresenham walk);
+  :func:`tie_rule_count`), on :func:`line_cells` (the library's ``crfmap.raycast.bresenham_step``, Listing 1's
+  Bresenham walk);
 - the end points of scans (:func:`scan_end_points`, :func:`end_points`, :func:`in_occupied_cell`,
   :func:`discretisation_share`);
 - odometry in the map frame (:func:`odometry_in_map`, :func:`scans_on_odometry`, :func:`motion_summary`);
 - timed builds of real recordings (:func:`timed_build`, :func:`recording_summary`, :func:`build_summary`,
   :func:`builder_table`);
-- :func:`first_hit`, crfmap's own ray caster, re-exported beside :func:`ray_paths` for the notebook's cross-check;
+- :func:`first_hit`, crfmap's own ray caster (``crfmap.raycast.first_hit_kernel``, which the simulator casts with),
+  beside :func:`ray_paths` for the notebook's cross-check;
 - the figures (each returns a Figure; the notebook saves it).
 
 >>> occupied = np.zeros((1, 4), dtype=bool); occupied[0, 2] = True
@@ -26,19 +28,55 @@ import time
 import numpy as np
 from matplotlib.patches import Circle, Rectangle
 
+from crfmap.errors import InputError
 from crfmap.frames import compose
 from crfmap.mapping import build_grid
-from crfmap.raycast import first_hit, line_cells
+from crfmap.raycast import bresenham_step, first_hit_kernel
 from crfmap.recording import ScanSet
-from crfstudy.plotting import show_grid
+from crfstudy.plotting import imshow_extent, show_grid
 
 __all__ = ["builder_table", "build_summary", "cells_until_hit", "discretisation_figure",
-           "discretisation_share", "end_points", "first_hit", "in_occupied_cell", "motion_figure", "motion_summary",
-           "odometry_in_map", "ray_paths", "raycast_figure", "real_maps_figure", "recording_summary", "scan_end_points",
-           "scan_figure", "scans_on_odometry", "tie_rule_count", "tie_rule_figure", "tie_rule_paths", "timed_build"]
+           "discretisation_share", "end_points", "first_hit", "in_occupied_cell", "line_cells", "motion_figure",
+           "motion_summary", "odometry_in_map", "ray_paths", "raycast_figure", "real_maps_figure", "recording_summary",
+           "scan_end_points", "scan_figure", "scans_on_odometry", "tie_rule_count", "tie_rule_figure", "tie_rule_paths",
+           "timed_build"]
 
 
 # ---- ray casting cell by cell ----------------------------------------------------------------------------------------
+
+def line_cells(x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
+    """Cells (x, y) of the Bresenham line between two cells, both ends included.
+
+    >>> line_cells(0, 0, 3, 1).tolist()
+    [[0, 0], [1, 0], [2, 1], [3, 1]]
+    """
+    ints = []
+    for name, v in zip(("x0", "y0", "x1", "y1"), (x0, y0, x1, y1)):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+            raise InputError(name, f"cell coordinates must be integers, got {v!r}")
+        ints.append(int(v))
+    x0, y0, x1, y1 = ints
+    out = np.empty((max(abs(x1 - x0), abs(y1 - y0)) + 1, 2), dtype=np.int64)
+    n = bresenham_step(x0, y0, x1, y1, out)
+    return out[:n]
+
+
+def first_hit(occupied, start, end):
+    """(x, y) of the first occupied cell of ``occupied`` ([y, x] bool) seen from cell ``start`` (x, y) towards cell
+    ``end``, or None if the ray reaches ``end`` (or leaves the grid) unblocked.
+
+    >>> occ = np.zeros((1, 5), bool); occ[0, 3] = True
+    >>> first_hit(occ, (0, 0), (4, 0))
+    (3, 0)
+    """
+    occ = np.asarray(occupied)
+    if occ.ndim != 2 or occ.size == 0:
+        raise InputError("occupied", f"expected a non-empty 2-D [y, x] array, got shape {occ.shape}")
+    x0, y0 = (int(v) for v in start)
+    x1, y1 = (int(v) for v in end)
+    x, y, hit = first_hit_kernel(occ.astype(np.bool_), x0, y0, x1, y1)
+    return (int(x), int(y)) if hit else None
+
 
 def cells_until_hit(cells, occupied) -> tuple:
     """The ray's cells (x, y) up to and including the first occupied one, and that cell (None if none).
@@ -161,8 +199,8 @@ def scan_figure(truth, pose, ends, hit, range_max: float, title: str):
                 arrowprops=dict(arrowstyle="-|>", color="C2", lw=2))
     ax.plot([], [], color="C0", lw=0.6, alpha=0.5, label="no return (+inf)")
     ax.legend(loc="lower right", fontsize="small")
-    ax.set_xlim(truth.imshow_extent()[:2])
-    ax.set_ylim(truth.imshow_extent()[2:])
+    ax.set_xlim(imshow_extent(truth)[:2])
+    ax.set_ylim(imshow_extent(truth)[2:])
     return fig
 
 

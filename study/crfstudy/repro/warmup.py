@@ -204,12 +204,14 @@ def _simulator():
 
     import numpy as np
 
-    from crfmap.raycast import first_hit, line_cells
+    from crfmap.raycast import bresenham_step, first_hit_kernel
 
     occupied = np.zeros((8, 8), bool)
     occupied[5, :] = True
-    line_cells(0, 0, 7, 3)
-    first_hit(occupied, (1, 1), (2, 7))
+    # the kernels as notebook 03's line_cells and first_hit (crfstudy.experiments.simulation) call them: that module
+    # needs matplotlib, which this script may run without
+    bresenham_step(0, 0, 7, 3, np.empty((8, 2), np.int64))
+    first_hit_kernel(occupied, 1, 1, 2, 7)
     laser = Laser.with_fov(360, 90, range_max=3.0)
     scene = occluded_walls("train", size=20)
     for drive in ("look", "explore", "waypoints"):

@@ -23,16 +23,16 @@ belief just inside the nearest class the evidence allows:
   out occupied, while those in a wall's gap mostly are: they keep the CRF's belief. The floor above keeps them unknown
   to nav2; only their probability is calibrated. pi = 0.5 changes nothing.
 
-Two outputs, because a probability and a decision answer different questions: :meth:`EvidenceGate.calibrate` applies
-the prior only (the beliefs a user scores or fuses: ``Preset.refine(...).beliefs``, a ``.npy``);
-:meth:`EvidenceGate.beliefs_and_map` also gives the decision, each belief that would cross one of nav2's thresholds
-moved inside the class the evidence allows (``LBPResult.nav2_map``: the map_server map, what the node publishes). A
-belief kept from crossing is a safer decision, not a better probability, so it stays out of the beliefs.
+Two outputs, because a probability and a decision answer different questions: :meth:`EvidenceGate.beliefs_and_map`
+gives the beliefs with the prior only (what a user scores or fuses: ``Preset.refine(...).beliefs``, a ``.npy``) and
+the decision, each belief that would cross one of nav2's thresholds moved inside the class the evidence allows
+(``LBPResult.nav2_map``: the map_server map, what the node publishes). A belief kept from crossing is a safer
+decision, not a better probability, so it stays out of the beliefs.
 
 >>> gate = EvidenceGate(unobserved_prior=0.25)
 >>> p = np.array([[0.10, 0.10, 0.10, 0.90, 0.30]])
 >>> hits, passes = np.array([[0, 0, 0, 3, 0]]), np.array([[5, 1, 0, 0, 0]])
->>> gate.calibrate(p, hits, passes).round(3).tolist()   # the never-observed cells take the prior
+>>> gate.beliefs_and_map(p, hits, passes)[0].round(3).tolist()   # the never-observed cells take the prior
 [[0.1, 0.1, 0.036, 0.9, 0.125]]
 >>> gate.apply(p, hits, passes).round(3).tolist()   # free kept, x = -1 and unseen raised, x = 3 kept
 [[0.1, 0.21, 0.21, 0.9, 0.21]]
@@ -135,18 +135,15 @@ class EvidenceGate:
         return self.beliefs_and_map(probability, hits, passes, evidence, observed)[1]
 
     def beliefs_and_map(self, probability, hits=None, passes=None, evidence=None, observed=None, transform=None):
-        """(beliefs, map for nav2), new float64 [y, x] arrays: :meth:`calibrate`, then ``transform`` of the beliefs
-        (e.g. a preset's temperature; None: none), then the decision from them. Arguments as :meth:`apply`.
+        """(beliefs, map for nav2), new float64 [y, x] arrays: the beliefs with the never-observed prior, then
+        ``transform`` of them (e.g. a preset's temperature; None: none), then the decision from them. Arguments as
+        :meth:`apply`.
         """
         cells = self._cells(probability, hits, passes, evidence, observed)
         beliefs = self._calibrate(*cells)
         if transform is not None:
             beliefs = np.asarray(transform(beliefs), dtype=np.float64)
         return beliefs, self._decide(beliefs, *cells[1:])
-
-    def calibrate(self, probability, hits=None, passes=None, evidence=None, observed=None) -> np.ndarray:
-        """The beliefs with the never-observed prior only, a new float64 [y, x] array. Arguments as :meth:`apply`."""
-        return self._calibrate(*self._cells(probability, hits, passes, evidence, observed))
 
     def _cells(self, probability, hits, passes, evidence, observed):
         """(P as a new float64 array, evidence x, seen mask, observed walls, never-observed cells off wall lines)."""

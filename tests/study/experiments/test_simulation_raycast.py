@@ -1,9 +1,10 @@
-"""crfmap.raycast against a slow exact reference (tests/naive_raycast.py), and the thesis's Fig. 15 cases."""
+"""crfmap.raycast's kernels, through the study's line_cells and first_hit (crfstudy.experiments.simulation), against a
+slow exact reference (tests/naive_raycast.py), and the thesis's Fig. 15 cases."""
 import numpy as np
 import pytest
 
 from crfmap.errors import InputError
-from crfmap.raycast import first_hit, line_cells
+from crfstudy.experiments.simulation import first_hit, line_cells
 from naive_raycast import exact_line, is_tie, walk_first_hit
 
 RNG_SEED = 20240611
