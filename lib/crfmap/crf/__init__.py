@@ -1,21 +1,14 @@
 """The CRF and its inference, in three layers a reader can take one at a time.
 
-- :mod:`crfmap.crf.model`: what the CRF is. ``potentials`` (the two 2x2 tables and how they are
-  checked), ``evidence`` (cells made certain by hard evidence).
-- :mod:`crfmap.crf.inference`: how it is solved. ``lbp.infer`` (checks its input, picks a kernel,
-  returns an ``LBPResult`` from ``result``), ``schedules`` (each schedule with the settings
-  that apply to it, and the plain kernels that run them), ``regions`` (bounded LBP's masks),
-  ``multiscale`` (coarse-to-fine start), ``compiling`` (the first-run notice). The references the tests
-  compare with (brute force, a textbook LBP) are the study's (``crfstudy.references``).
-- :mod:`crfmap.crf.engine`: the fast checkerboard engine. ``solve.solve`` (its one entry, an
-  ``EngineResult``), ``packed`` (red/black odds planes and the passes over them),
-  ``_message_update`` (the numba message update), ``_layout`` (packing kernels),
-  ``incremental`` (the public API the online mapper drives), ``messages`` and ``workspace``.
-- :mod:`crfmap.crf.presets`: named configurations, model and solver together (the one source of settings for
-  ``crfmap infer``, ``crfmap evaluate``, the node, the online mapper and the notebooks); above the three layers,
-  since a preset runs inference.
-- :mod:`crfmap.crf.threads`: row bands of ``nogil`` kernels on Python threads (cheaper to compile
-  than numba's parallel loops), used by all three layers.
+- :mod:`crfmap.crf.model`: what the CRF is: ``potentials`` (the two 2x2 tables and their checks), ``evidence`` (cells
+  made certain by hard evidence), ``gating`` (what a cell's own evidence lets nav2 read).
+- :mod:`crfmap.crf.inference`: how it is solved: ``lbp.infer`` (checks its input, picks a kernel, returns an
+  ``LBPResult``), ``schedules`` (and the plain kernels that run them), ``regions``, ``multiscale``, ``compiling``. The
+  references the tests compare with (brute force, a textbook LBP) are the study's (``crfstudy.references``).
+- :mod:`crfmap.crf.engine`: the fast checkerboard engine (its modules: its docstring).
+- :mod:`crfmap.crf.presets`: named configurations, model and solver together, the one source of settings for every
+  path; above the three layers, since a preset runs inference.
+- :mod:`crfmap.crf.threads`: row bands of ``nogil`` kernels on Python threads, used by all three layers.
 
 From :func:`infer` to the kernel that updates a message: ``infer -> engine.solve.solve -> PackedBlock.run -> _pass``
 (fast), ``infer -> run_schedule -> kernel`` (plain).

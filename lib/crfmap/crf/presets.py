@@ -1,9 +1,8 @@
 """Named CRF configurations, model and solver together: the one source of settings for every path.
 
-- ``"thesis"``: the thesis's tables, hidden [[10, 1], [1, 10]] and the identity link, over the whole grid. Its
-  coupling J = ln(10) / 2 = 1.15 is far above the square lattice's critical ln(1 + sqrt 2) / 2 = 0.44: in this
-  ordered phase LBP erases thin walls and gives never-seen space the state of its border. Use it to reproduce the
-  thesis.
+- ``"thesis"``: the thesis's tables (hidden [[10, 1], [1, 10]], identity link, whole grid), to reproduce the
+  thesis. Its coupling J = ln(10) / 2 = 1.15 is far above the square lattice's critical ln(1 + sqrt 2) / 2 = 0.44:
+  in this ordered phase LBP erases thin walls and gives never-seen space the state of its border.
 - ``"certainty"``: a cell's observation follows its signed evidence ``x = hits - passes``: P(occupied) =
   ``sigmoid(l)`` with ``l = min(a + b (x - 1), limit)`` for x > 0 (``(a, b) = occupied``: the first net hit is worth
   a, each further one b), ``l = -min(c + d (|x| - 1), limit)`` for x < 0 (``(c, d) = free``), l = 0 for x = 0. A
@@ -12,9 +11,7 @@
   runs only within ``margin`` cells of an observation: space far from every observation stays 0.5 (unknown).
 - ``"gated"`` (:data:`DEFAULT_PRESET`): the certainty model at J = 0.30, below LBP's own critical coupling (the Bethe
   value atanh(1/3) = 0.347), then an :class:`~crfmap.crf.model.gating.EvidenceGate` for what a robot does with the
-  map (``certainty`` opens walls and thickens them). Its result has two faces: ``beliefs``, the probabilities (a
-  ``.npy``; Brier and calibration score them), and ``nav2_map``, the gate's decision (a map_server map; what the node
-  publishes).
+  map (``certainty`` opens walls and thickens them; its two outputs: :mod:`crfmap.crf.model.gating`).
 
 ``temperature`` T (default 1: no change) tempers the whole refined map, ``P' = sigmoid(logit(P) / T)``
 (:func:`temper`); :func:`crfmap.assess.calibration.fit_temperature` fits it.
@@ -285,9 +282,8 @@ class Preset:
 
     def finish(self, probability, hits=None, passes=None, evidence_grid=None, observed=None) -> tuple:
         """(beliefs, map for nav2 or None without a gate) of LBP's ``probability``: the gate's prior, the temperature
-        (whole map), then the gate's decision. Each cell's evidence comes from ``hits`` and ``passes`` or, for a map
-        file, from its P (``evidence_grid``, with the ``observed`` mask). :meth:`refine` and the online mapper end here.
-        """
+        (whole map), then the gate's decision. Each cell's evidence: ``hits`` and ``passes``, or a map file's P
+        (``evidence_grid``) with the ``observed`` mask. :meth:`refine` and the online mapper end here."""
         tempered = None if self.temperature == 1.0 else (lambda p: temper(p, self.temperature))
         if self.gate is None:
             p = np.asarray(probability, dtype=np.float64)

@@ -3,7 +3,7 @@
 A ``parallel=True`` kernel takes two to three times as long to compile as the same loop compiled serially, and that
 compile is the wait of a first ``crfmap infer``. So crfmap's kernels are serial ``@njit(nogil=True)`` functions over
 a range of rows (or a list of jobs), run here on a persistent pool per thread count, the calling thread doing one
-share itself. The thread count is the caller's, or ``numba.get_num_threads()`` (which ``infer`` sets for a call).
+share itself, ``threads`` at a time (:func:`thread_count`).
 
 >>> import numpy as np
 >>> from numba import njit

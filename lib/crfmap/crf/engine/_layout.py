@@ -3,8 +3,7 @@ odds planes of :mod:`crfmap.crf.engine._message_update` (private; used by :mod:`
 
 Kernels over rows take their band ``[r0, r1)`` last and release the GIL, for :func:`crfmap.crf.threads.over_rows`.
 All take ``error_model="numpy"``: under numba's default every division checks for a zero divisor (to raise
-ZeroDivisionError), so no loop with one vectorises; a zero divisor gives inf or NaN, as in NumPy.
-"""
+ZeroDivisionError), so no loop with one vectorises; a zero divisor gives inf or NaN, as in NumPy."""
 from __future__ import annotations
 
 import numpy as np
@@ -190,8 +189,7 @@ def _pack_start(prob, link, floor, co, un, msg, stats, b):
     """Row block ``b`` of ``stats.shape[0]`` (independent: threads may run them at once) of a whole grid from uniform
     messages: observation odds into ``un`` and, of the message slots, only those no neighbour ever sends into and the
     ghost rows (1); the first pass (``uniform_start``) writes every other slot before anything reads it. Counts into
-    ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence).
-    """
+    ``stats[b]``: cells outside [0, 1] or not finite, and cells the link makes certain (hard evidence)."""
     h, w = prob.shape
     wp = un.shape[2]
     nblocks = stats.shape[0]

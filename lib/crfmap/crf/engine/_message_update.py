@@ -20,8 +20,7 @@ kernel Python calls to iterate. Same schedule and fixed point as :func:`crfmap.c
   divisions, so it is measured only on the iterations asked for (by default the last of each pass).
 
 ``act`` (bounded LBP) holds 1 where a cell may send; ``lo_k, hi_k`` bound the plane indices of each row's active
-cells so a small region costs little. The arrays and the Python driver live in :mod:`crfmap.crf.engine.packed`.
-"""
+cells so a small region costs little. The arrays and the Python driver live in :mod:`crfmap.crf.engine.packed`."""
 from __future__ import annotations
 
 import numpy as np
@@ -321,10 +320,9 @@ def _phase_rows(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, 
 
 
 # --- passes ----------------------------------------------------------------------------------
-# Rows are cut into tiles of tile_h rows; in each row tile, only the cells of the segments
-# segs[ty, :nseg[ty]] (column ranges [x0, x1)) send: the others are frozen. Changes are
-# max-accumulated per column into cb[row tile, :] (threads never share a row tile: band edges
-# are multiples of tile_h) and give the largest change per tile.
+# Rows are cut into tiles of tile_h rows; in each row tile, only the cells of the segments segs[ty, :nseg[ty]] (column
+# ranges [x0, x1)) send: the others are frozen. Changes are max-accumulated per column into cb[row tile, :] (threads
+# never share a row tile: band edges are multiples of tile_h) and give the largest change per tile.
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -338,8 +336,7 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
 
     ``with_beliefs`` (the whole grid sends): each row's beliefs go into ``bel`` once it and its two neighbours
     finished the last phase, while in cache: a band does rows [y0 + phases, y1 - phases) (from ylo / to yhi at the
-    grid's edges), the gap the rows between, after its last phase.
-    """
+    grid's edges), the gap the rows between, after its last phase."""
     blo = y0 + phases if y0 > ylo else ylo
     bhi = y1 - phases if y1 < yhi else yhi
     # one call site of the rows: each would hold its own compiled copy of them
@@ -366,8 +363,7 @@ def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges,
     A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the inverted trapezoids
     between bands). Rows outside [edges[0], edges[-1]) must hold no sender. Iterations from ``measure_from`` on are
     measured (max-accumulated into ``cb``); ``uniform_start``: the red cells' first half-sweep loads no message.
-    ``with_beliefs`` (every cell sends): the beliefs after the pass into ``bel`` [h, w], row by row while in cache.
-    """
+    ``with_beliefs`` (every cell sends): the beliefs after the pass into ``bel`` [h, w], row by row while in cache."""
     phases = 2 * iterations
     nb = edges.shape[0] - 1
     for b in prange(nb - stage):

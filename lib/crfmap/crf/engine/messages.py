@@ -3,8 +3,7 @@
 The layout (the plain kernels' and the fast engine's unpacked messages): ``msg[d, y, x]`` is the message arriving at
 cell (y, x) that travelled in direction d (0 east-bound, from the west neighbour; 1 west-bound, from the east; 2
 north-bound, from the south; 3 south-bound, from the north), as P(receiver occupied). A slot with no neighbour
-behind it stays 0.5.
-"""
+behind it stays 0.5."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,9 +1,5 @@
-"""The fast engine's data: red/black odds planes of a block of the grid, and the passes that iterate them.
-
-:class:`PackedBlock` holds the observations and messages of a rectangular block of cells in the layout of
-:mod:`crfmap.crf.engine._message_update`, converts to and from the probability layout of
-:mod:`crfmap.crf.engine.messages`, and runs checkerboard iterations (:meth:`PackedBlock.run`).
-"""
+"""The fast engine's data, :class:`PackedBlock`: a block of the grid in the red/black odds planes of
+:mod:`crfmap.crf.engine._message_update`, converted to and from :mod:`crfmap.crf.engine.messages`, and its passes."""
 from __future__ import annotations
 
 import math
@@ -111,8 +107,7 @@ class PackedBlock:
         """Whole-grid block from uniform messages in one trip: the observation odds and only the message slots no
         neighbour sends into; the next pass (at least two iterations of the whole grid) sends the red cells' first
         half-sweep from the odds alone. Returns (cells of ``probability`` outside [0, 1] or not finite, cells
-        ``link`` makes certain): with either, the result must not be used.
-        """
+        ``link`` makes certain): with either, the result must not be used."""
         link = np.asarray(link, np.float64).ravel()
         stats = np.zeros((max(1, min(4 * int(threads), self.h)), 2), np.int64)
         run_all(_pack_start, [(probability, link, self.floor, self.co, self.un, self.msg, stats, b)
@@ -284,16 +279,13 @@ class PackedBlock:
         changes (NaN where not measured, and for the last if max_iter ends the run before it was confirmed).
 
         Passes of ``first``, 2 ``first``, 4 ``first``, ... ``block`` iterations, each measuring its last (``first`` 1
-        after a warm start, which may stop at once; ``block`` from uniform messages: then two passes of ``block /
-        2`` first). Once two passes measured, a pass is cut to the iterations their rate predicts to reach ``tol``,
-        so the run stops near tol. ``freeze`` (below ``tol``; None: ``FREEZE * tol``; 0 changes nothing): once fewer
-        than SPARSE_FRACTION of the tiles moved by more than it, only those tiles and their four neighbours iterate;
-        when they settle below ``tol``, one iteration of every cell decides (``confirm_settled`` False: the run ends
-        unconfirmed, for a caller that confirms itself).
-
-        ``beliefs`` (float64 [h, w], no mask): a whole-grid pass that is likely the last also writes the beliefs
-        there while each row is in cache; :attr:`beliefs_written` says whether the last pass did.
-        """
+        after a warm start, which may stop at once; ``block`` from uniform messages: then two passes of ``block / 2``
+        first). Once two passes measured, a pass is cut to the iterations their rate predicts to reach ``tol``.
+        ``freeze`` (below ``tol``; None: ``FREEZE * tol``; 0 changes nothing): once fewer than SPARSE_FRACTION of the
+        tiles moved by more than it, only those tiles and their four neighbours iterate; when they settle below
+        ``tol``, one iteration of every cell decides (``confirm_settled`` False: the run ends unconfirmed, for a caller
+        that confirms itself). ``beliefs`` (float64 [h, w], no mask): a whole-grid pass that is likely the last also
+        writes the beliefs there while each row is in cache (:attr:`beliefs_written`: whether the last pass did)."""
         fusable = beliefs is not None and not self.use_act and self.row_range == (0, self.h) and self.h > 0
         self.beliefs_written = False
         confirm = False  # the whole-grid iteration after the moving tiles settled
@@ -305,7 +297,6 @@ class PackedBlock:
         # which runs to max_iter: each pass is one more trip through memory)
         halves = 2 if size >= block >= 4 and tol > 0 else 0
         size = block // 2 if halves else size
-        # freezing tiles pays only on grids of many tiles
         sparse = freeze is not None and (freeze < tol or freeze == 0) and self.active_cells >= SPARSE_CELLS
         active = None
         measured = []  # (iterations done, change) after each pass: the rate of convergence

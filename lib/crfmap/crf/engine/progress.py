@@ -1,8 +1,7 @@
 """Watching a long LBP run: the iteration loops report each pass to whoever asked, inside a :func:`watch` block.
 
-A run that does not settle iterates until the user's ``max_iter``; it can be watched (``crfmap infer`` shows a bar on
-a terminal) and stopped (Ctrl-C ends it between passes). The loops call :func:`passed` after every pass; outside a
-:func:`watch` block that is one context-variable read.
+A run that does not settle iterates until ``max_iter``; it can be watched (``crfmap infer``'s bar on a terminal) and
+stopped (Ctrl-C lands between passes). Outside a :func:`watch` block :func:`passed` is one context-variable read.
 
 >>> seen = []
 >>> with watch(lambda done, limit, change: seen.append((done, limit))):

@@ -1,15 +1,12 @@
 """The fast engine's one entry, :func:`solve`: pack a grid, iterate checkerboard LBP, unpack the result.
 
-Three paths. The whole grid from uniform messages (the common call) is packed in one trip through memory
-(:meth:`~crfmap.crf.engine.packed.PackedBlock.start_uniform`), which also checks the grid and finds hard evidence on
-the way (:func:`fused_start_applies`). A region from uniform messages without hard evidence (every preset's call)
-packs only the region's bounding box plus a one-cell halo (the receivers) and builds no whole-grid message array:
-outside the box the belief is the floored observation, and the messages are unpacked when first read; in float64
-with tol >= :data:`MIXED_MIN_TOL` it iterates in float32 first (faster), then in float64 from those messages until an
-iteration of every cell moves no message by tol, the same stopping rule (the result differs from a float64-only run
-by about tol, as two runs stopped at tol from different starts do). Warm starts, hard evidence and other regions take
-the general path: uniform planes, then the unary, messages, clamps or the region's box.
-"""
+Three paths. The whole grid from uniform messages (the common call) is packed, checked and searched for hard evidence
+in one trip through memory (:meth:`~crfmap.crf.engine.packed.PackedBlock.start_uniform`, :func:`fused_start_applies`).
+A region from uniform messages without hard evidence (every preset's call) packs only the region's bounding box plus a
+one-cell halo (the receivers): outside it the belief is the floored observation, and the messages are unpacked when
+first read; in float64 with tol >= :data:`MIXED_MIN_TOL` it iterates in float32 first (faster), then in float64 from
+those messages to the same stopping rule (the result differs from a float64-only run by about tol, as two runs
+stopped at tol from different starts do). Warm starts, hard evidence and other regions take the general path."""
 from __future__ import annotations
 
 import time

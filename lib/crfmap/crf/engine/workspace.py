@@ -1,10 +1,9 @@
 """Reusable buffers for :func:`crfmap.crf.inference.lbp.infer` on large grids: no fresh memory per call.
 
-Writing into freshly allocated memory costs a page fault per page: on large grids an ``infer`` call spent longer
-faulting its buffers in than iterating. The whole-grid fast path therefore takes its packed planes and its beliefs
-from here: the buffers of the last call of that shape and dtype when nothing else holds them (Python reference
-count: a result kept, even through a view, keeps its buffers), else new ones. The last large grid's buffers stay
-allocated until :func:`release_workspace`; grids under :data:`WORKSPACE_MIN_CELLS` always get new ones.
+Fresh memory costs a page fault per page: on large grids ``infer`` spent longer faulting its buffers in than
+iterating. So the whole-grid fast path takes its planes and beliefs from here: the last call's buffers of that shape
+and dtype when nothing else holds them (by reference count: a result kept, even through a view, keeps its buffers),
+else new ones, kept until :func:`release_workspace`. Grids under :data:`WORKSPACE_MIN_CELLS` always get new ones.
 
 >>> a = beliefs_buffer((2048, 1024)); b = beliefs_buffer((2048, 1024))
 >>> a is b  # the first is still held (by ``a``)

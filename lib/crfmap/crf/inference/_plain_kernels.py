@@ -3,8 +3,7 @@
 ``unary[y, x]``: the floored P(occupied) the observed layer tells each hidden cell; ``msg``: the layout of
 :mod:`crfmap.crf.engine.messages`; ``coef[d]``: :func:`crfmap.crf.model.potentials.message_coefficients`, one
 division an update; ``active[y, x]``: cells allowed to send (``use_active`` False ignores it). Every kernel returns
-the largest change of any message it wrote.
-"""
+the largest change of any message it wrote."""
 from __future__ import annotations
 
 import numpy as np

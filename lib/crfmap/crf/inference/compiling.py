@@ -1,8 +1,8 @@
 """Say so when numba starts compiling kernels (an empty cache: tens of seconds of silence otherwise), and measure how
 long compiling took, so it is never reported as the time of the work itself.
 
-Both listen to numba's event API (:mod:`numba.core.event`): "numba:compile" fires only while a kernel is compiled,
-never when it is loaded from the disk cache; "numba:compiler_lock" around both.
+Both listen to :mod:`numba.core.event`: "numba:compile" fires only while a kernel is compiled, never when it is loaded
+from the disk cache; "numba:compiler_lock" around both.
 
 >>> import io
 >>> with announcing(io.StringIO()) as note, compile_timer() as compiled:

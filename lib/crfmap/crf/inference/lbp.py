@@ -3,17 +3,11 @@
 The CRF has one binary hidden node per cell (4-neighbour edges, potential ``hidden``) and one observed node per cell
 holding the grid's P(occupied), which sends its hidden node one message through ``link``. :func:`infer` checks its
 input, clamps hard evidence (:mod:`crfmap.crf.model.evidence`), runs sum-product LBP with normalised messages on the
-schedule asked for and returns the beliefs with the convergence diagnostics
-(:class:`~crfmap.crf.inference.result.LBPResult`).
-
-The checkerboard schedule without damping runs on the fast engine (:mod:`crfmap.crf.engine`): the plain kernel's
-iterations to rounding, but the message change is measured only on the last iteration of each pass of up to
-``block`` iterations, so a run may do some iterations more before it sees ``tol``. The other schedules, and
-``Checkerboard(kernel="plain")``, run the plain kernels (:mod:`crfmap.crf.inference.schedules`).
+schedule asked for (the checkerboard without damping on the fast engine, :mod:`crfmap.crf.engine`: the plain kernel's
+iterations to rounding) and returns the beliefs with the convergence diagnostics.
 
 Bounded LBP (sec. 3.4.4): with ``region`` (e.g. :func:`crfmap.crf.inference.regions.disc_region`) only the cells in
-it send; every other message keeps its value (warm-start ``messages`` to carry them between calls).
-"""
+it send; every other message keeps its value (warm-start ``messages`` to carry them between calls)."""
 from __future__ import annotations
 
 import time
@@ -115,14 +109,13 @@ def infer(
 ) -> LBPResult:
     """Run loopy belief propagation on a grid's CRF; returns an :class:`LBPResult`.
 
-    ``grid``: an OccupancyGrid or a 2-D array of P(occupied) in [0, 1], indexed [y, x]. ``hidden``, ``link``: 2x2
-    tables (:mod:`crfmap.crf.model.potentials`). ``schedule``: a name (``"checkerboard"``, ``"flooding"``,
-    ``"sweep"``, ``"thesis"``) or its settings (:mod:`crfmap.crf.inference.schedules`). Iterations stop after
-    ``max_iter`` (the thesis used 2 with ``schedule="thesis"``) or once an iteration's largest message change is below
-    ``tol``. ``region``: a boolean [y, x] mask of the senders (bounded LBP). ``messages``: a (4, H, W) warm start
-    (e.g. ``previous_result.messages``). ``pairing``: ``"receiver"`` (thesis) or ``"oriented"``. ``threads``: None
-    for numba's default. ``dtype``: np.float64 or np.float32 (bounded LBP in float64 iterates in float32 first:
-    :mod:`crfmap.crf.engine.solve`). ``init``: ``"uniform"`` start messages or ``"coarse"``-to-fine
+    ``grid``: an OccupancyGrid or a 2-D array of P(occupied) in [0, 1], indexed [y, x]. ``hidden``, ``link``: 2x2 tables
+    (:mod:`crfmap.crf.model.potentials`). ``schedule``: a name or settings of :mod:`crfmap.crf.inference.schedules`.
+    Iterations stop after ``max_iter`` (the thesis used 2 with ``schedule="thesis"``) or once an iteration's largest
+    message change is below ``tol``. ``region``: a boolean [y, x] mask of the senders (bounded LBP). ``messages``:
+    a (4, H, W) warm start (e.g. ``previous_result.messages``). ``pairing``: ``"receiver"`` (thesis) or ``"oriented"``.
+    ``threads``: None for numba's default. ``dtype``: np.float64 or np.float32 (bounded LBP in float64 iterates in
+    float32 first: :mod:`crfmap.crf.engine.solve`). ``init``: ``"uniform"`` start messages or ``"coarse"``-to-fine
     (:mod:`crfmap.crf.inference.multiscale`; ``seconds`` includes the coarse levels, ``iterations`` counts the full
     grid's only).
 

@@ -1,8 +1,7 @@
 """Coarse-to-fine start for LBP: solve a 2x downsampled grid, upsample its messages as the warm start.
 
-``infer(grid, init="coarse")`` halves the grid recursively (:func:`downsample`) down to about
-:data:`COARSE_MIN_SIDE` cells a side, runs LBP there from uniform messages, and hands every finer level the coarser
-level's converged messages, each fine cell taking the message its coarse cell received from the same direction.
+``infer(grid, init="coarse")`` halves the grid (:func:`downsample`) down to about :data:`COARSE_MIN_SIDE` cells a side,
+runs LBP there from uniform messages, and warm-starts each finer level from the coarser (:func:`upsample_messages`).
 
 Where LBP has a single fixed point (couplings below critical) the start changes only the path, not the beliefs. In
 the ordered phase LBP has several fixed points and the start picks one (``crfmap bench``'s ``converge-start`` row and
@@ -28,8 +27,7 @@ def downsample(probability) -> np.ndarray:
     """Each 2x2 block's evidence as one cell's: P whose log-odds is the sum of the four cells' (P clipped to
     [PROBABILITY_FLOOR, 1 - PROBABILITY_FLOOR] first), shape (ceil(H / 2), ceil(W / 2)); an odd last row or column
     counts twice. The block as one spin, the strong-coupling limit: the mean of P instead washes thin walls out, and
-    the ordered phase then settles the fine grid on an all-empty fixed point.
-    """
+    the ordered phase then settles the fine grid on an all-empty fixed point."""
     p = np.clip(np.asarray(probability, dtype=np.float64), PROBABILITY_FLOOR, 1.0 - PROBABILITY_FLOOR)
     h, w = p.shape
     hh, ww = (h + 1) // 2, (w + 1) // 2

@@ -29,8 +29,7 @@ class LBPResult:
 
     @property
     def nav2_map(self) -> OccupancyGrid:
-        """The map to hand nav2 (write as a map_server map, publish on /map): the gated beliefs, else the beliefs.
-        :attr:`beliefs` are the probabilities (score them, fuse them); this is the decision nav2 reads."""
+        """The map to hand nav2 (a map_server map, published on /map): the gated beliefs, else the beliefs."""
         return self.beliefs if self.gated is None else self.gated
 
     @property

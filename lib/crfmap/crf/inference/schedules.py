@@ -145,13 +145,11 @@ class _PlainRun:
 
 
 def _checkerboard_iteration(settings, r):
-    """Red cells send, then black cells."""
     return max(max(over_rows(K._send_rows, r.y1 - r.y0, r.unary, r.msg, r.msg, r.coef, r.active, r.use_active,
                              parity, r.y0, r.floor, r.damping), default=0.0) for parity in (0, 1))
 
 
 def _flooding_iteration(settings, r):
-    """Every message from the last iteration's."""
     new = r.scratch.setdefault("new", r.msg.copy())
     c = max(over_rows(K._send_rows, r.y1 - r.y0, r.unary, r.msg, new, r.coef, r.active, r.use_active, -1, r.y0,
                       r.floor, r.damping), default=0.0)
@@ -160,7 +158,6 @@ def _flooding_iteration(settings, r):
 
 
 def _sweep_iteration(settings, r):
-    """East-, west-, north-, south-bound (thesis sec. 2.6.2): each crosses the grid."""
     shape = r.unary.shape
     return max([max(over_rows(K._sweep_along_rows, r.y1 - r.y0, r.unary, r.msg, r.coef, r.active, r.use_active, d,
                               r.y0, r.floor, r.damping), default=0.0) for d in (0, 1)]
@@ -169,8 +166,6 @@ def _sweep_iteration(settings, r):
 
 
 def _thesis_iteration(settings, r):
-    """Breadth-first from the start cell, each visited cell pulling fresh messages; the next pass starts where this
-    one ended (sec. 2.6.2)."""
     shape = r.unary.shape
     if "start" not in r.scratch:
         corner = {"lower-left": (0, 0), "lower-right": (0, shape[1] - 1),

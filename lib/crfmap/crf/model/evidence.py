@@ -73,7 +73,6 @@ def _propagate(state, forced, senders, use_senders, steps):
     for i in range(h * w):
         y, x = i // w, i % w
         if not use_senders or senders[y, x]:
-            # a state whose column is all zero towards an existing neighbour is impossible
             possible = 3  # bit s: state s is possible
             for d in range(4):
                 ny, nx = y + steps[d, 0], x + steps[d, 1]
@@ -121,7 +120,7 @@ def _propagate(state, forced, senders, use_senders, steps):
 
 @njit(nogil=True, cache=True)
 def _send_clamped(state, senders, use_senders, implied, steps, msg, r0, r1):
-    """Write into ``msg`` (layout of :mod:`._lbp_kernels`) the messages every certain sender implies."""
+    """Write into ``msg`` (layout of :mod:`crfmap.crf.engine.messages`) the messages every certain sender implies."""
     h, w = state.shape
     for y in range(r0, r1):
         for x in range(w):
@@ -174,8 +173,7 @@ def certain_states(probability, link, tables, senders=None, name="grid"):
     """Per cell 1 (certainly occupied), 0 (certainly empty) or UNCERTAIN (-1), as int8 [y, x]; None if none is certain.
 
     ``tables``: the four directional tables; certainty spreads only from ``senders`` (a boolean mask, None: all).
-    Contradictory hard evidence raises :class:`InputError` naming ``name`` and the cell.
-    """
+    Contradictory hard evidence raises :class:`InputError` naming ``name`` and the cell."""
     prob = np.ascontiguousarray(probability, dtype=np.float64)
     link = np.asarray(link, np.float64).ravel()
     forced = forced_states(tables)

@@ -1,11 +1,10 @@
 """Evidence gating: what a refined map may say to nav2 about a cell, given that cell's own evidence.
 
 nav2 reads a map in three classes (map_saver's trinary, on v = rint(100 P)): lethal v >= 65 (P >= 0.65), free
-v <= 20 (P <= 0.196), unknown between. A refinement that calls free a cell the raw grid kept lethal or unknown opens
-a wall for the planner; LBP does that wherever a weakly observed cell (a wall face grazed by beams, a cell seen once)
-sits next to free space, and it grows walls into space no beam reached. An :class:`EvidenceGate` lets the CRF's
-belief stand where the cell's own evidence x = hits - passes agrees with the class it gives, and otherwise moves the
-belief just inside the nearest class the evidence allows:
+v <= 20 (P <= 0.196), unknown between. LBP calls free a weakly observed cell (a wall face grazed by beams, a cell seen
+once) next to free space, opening a wall for the planner, and grows walls into space no beam reached. An
+:class:`EvidenceGate` lets the CRF's belief stand where the cell's own evidence x = hits - passes agrees with the
+class it gives, and otherwise moves the belief just inside the nearest class the evidence allows:
 
 - **free needs the cell's own passes**: a cell with x > -``free_evidence`` is raised to at least
   :data:`UNKNOWN_FLOOR`. With ``free_evidence`` >= 2 the refined map's free cells are a subset of the raw arctan
@@ -23,11 +22,10 @@ belief just inside the nearest class the evidence allows:
   out occupied, while those in a wall's gap mostly are: they keep the CRF's belief. The floor above keeps them unknown
   to nav2; only their probability is calibrated. pi = 0.5 changes nothing.
 
-Two outputs, because a probability and a decision answer different questions: :meth:`EvidenceGate.beliefs_and_map`
-gives the beliefs with the prior only (what a user scores or fuses: ``Preset.refine(...).beliefs``, a ``.npy``) and
-the decision, each belief that would cross one of nav2's thresholds moved inside the class the evidence allows
-(``LBPResult.nav2_map``: the map_server map, what the node publishes). A belief kept from crossing is a safer
-decision, not a better probability, so it stays out of the beliefs.
+Two outputs, since a probability and a decision answer different questions (:meth:`EvidenceGate.beliefs_and_map`):
+the beliefs with the prior only (what a user scores or fuses: ``Preset.refine(...).beliefs``, a ``.npy``), and the
+decision, the beliefs moved by the rules above (``LBPResult.nav2_map``: the map_server map the node publishes). A
+belief kept from crossing a threshold is a safer decision, not a better probability, so it stays out of the beliefs.
 
 >>> gate = EvidenceGate(unobserved_prior=0.25)
 >>> p = np.array([[0.10, 0.10, 0.10, 0.90, 0.30]])
@@ -136,9 +134,7 @@ class EvidenceGate:
 
     def beliefs_and_map(self, probability, hits=None, passes=None, evidence=None, observed=None, transform=None):
         """(beliefs, map for nav2), new float64 [y, x] arrays: the beliefs with the never-observed prior, then
-        ``transform`` of them (e.g. a preset's temperature; None: none), then the decision from them. Arguments as
-        :meth:`apply`.
-        """
+        ``transform`` of them (e.g. a preset's temperature; None: none), then the decision. Arguments: :meth:`apply`."""
         cells = self._cells(probability, hits, passes, evidence, observed)
         beliefs = self._calibrate(*cells)
         if transform is not None:

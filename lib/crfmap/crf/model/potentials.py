@@ -19,8 +19,7 @@ Pairing (how a hidden table applies to an undirected lattice edge):
   pairwise CRF for a symmetric table; for a non-symmetric one (the thesis's learned tables) the thesis's
   directed-influence model, which has no joint distribution to compare against.
 - ``"oriented"``: a proper pairwise CRF whose edge potential is ``psi(x_a, x_b) = hidden[x_a, x_b]`` with ``a`` the
-  west (lower x) or south (lower y) cell of the edge. Same as ``"receiver"`` for symmetric tables.
-"""
+  west (lower x) or south (lower y) cell of the edge. Same as ``"receiver"`` for symmetric tables."""
 from __future__ import annotations
 
 import numpy as np
