@@ -49,12 +49,10 @@ def _end_cell(u0, v0, u1, v1, width, height):
 @njit(cache=True, nogil=True)
 def _count_hits(ranges, angles, poses, range_min, range_max, max_is_no_return, free_range,
                 origin_x, origin_y, resolution, occupied, empty, buf, stamp, scan_id, touched):
-    """Add every beam's hits to ``occupied[y, x]`` / ``empty[y, x]`` (in place).
+    """Add every beam's hits to ``occupied[y, x]`` / ``empty[y, x]`` (in place); returns (beams used, n_touched).
 
-    With a ``stamp`` array the size of the grid (else pass a 0 x 0 one), every cell a beam
-    passes or ends in is listed once in ``touched[:n_touched]`` as (x, y) and stamped with
-    ``scan_id`` (stamps must be below it beforehand). Returns (beams used, n_touched).
-    """
+    With a ``stamp`` array the size of the grid (else a 0 x 0 one), every cell a beam passes or ends in is listed once
+    in ``touched[:n_touched]`` as (x, y) and stamped with ``scan_id`` (stamps must be below it beforehand)."""
     height, width = occupied.shape
     record = stamp.shape[0] > 0
     used = 0

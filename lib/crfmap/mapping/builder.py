@@ -1,11 +1,11 @@
 """Occupancy grids from laser scans with known poses (thesis sec. 3.2).
 
-Every beam is ray-cast (Bresenham, :func:`crfmap.raycast.bresenham_step`) from the laser's
-cell to its end point's cell: the cells passed are *empty hits*, the end cell an
-*occupied hit* unless the beam returned nothing. Two ways to turn hits into P(occupied):
+Every beam is ray-cast (Bresenham, :func:`crfmap.raycast.bresenham_step`) from the laser's cell to its end point's
+cell: the cells passed are *empty hits*, the end cell an *occupied hit* unless the beam returned nothing. Two ways to
+turn hits into P(occupied):
 
-- ``model="arctan"`` (the thesis, eq. 16): with x = occupied hits - empty hits over all
-  beams, ``P = 0.5 + atan(x) / pi``. Cells never passed stay 0.5 (unknown).
+- ``model="arctan"`` (the thesis, eq. 16): with x = occupied hits - empty hits over all beams, ``P = 0.5 + atan(x) /
+  pi``. Cells never passed stay 0.5 (unknown).
 - ``model="logodds"`` (the baseline of Probabilistic Robotics, ch. 9, Table 9.1): per scan, every cell the scan
   observes gets ``l += log(p/(1-p))`` once, with ``p = p_hit`` if a beam ended in it (occupied takes precedence, as
   in OctoMap) and ``p = p_miss`` otherwise; ``l`` is clamped to ``[-logodds_limit, logodds_limit]`` after each
@@ -13,8 +13,7 @@ cell to its end point's cell: the cells passed are *empty hits*, the end cell an
 
 Readings follow REP 117: NaN (invalid) and -Inf (too close) are dropped, finite readings outside [range_min,
 range_max] are dropped, +Inf (and a finite reading equal to range_max, the legacy max-range code) means "no return":
-it clears free space up to ``free_on_no_return`` metres when asked, and is dropped otherwise.
-"""
+it clears free space up to ``free_on_no_return`` metres when asked, and is dropped otherwise."""
 from __future__ import annotations
 
 import math

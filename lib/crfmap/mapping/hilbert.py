@@ -85,8 +85,7 @@ def _lam(xi):
 def _fit_batch(ptr, idx, val, y, mu, sig, n_iter, acc_prec, acc_b, mark, batch, touched, mu0, sig0):  # pragma: no cover
     """The authors' closed-form rounds on one batch; ``mu``, ``sig`` (prior in, posterior out) in place.
 
-    ``mark`` (one int per feature, below ``batch`` on entry) finds the batch's features without sorting.
-    """
+    ``mark`` (one int per feature, below ``batch`` on entry) finds the batch's features without sorting."""
     n = ptr.size - 1
     m = 0
     for k in range(idx.size):
@@ -194,10 +193,8 @@ class HilbertMap:
 
 
 def beam_samples(scans, free_spacing=FREE_SPACING, bounds=None, max_range_is_no_return=True):
-    """Per scan, (points [n, 2], labels [n]): returned beams' end points (1) and free points along them (0).
-
-    Readings follow REP 117; no-return beams give nothing. With ``bounds`` (xmin, ymin, xmax, ymax), points outside
-    are dropped.
+    """Per scan, (points [n, 2], labels [n]) as the module docstring says; readings follow REP 117 and no-return beams
+    give nothing. With ``bounds`` (xmin, ymin, xmax, ymax), points outside are dropped.
 
     >>> from crfmap.recording import ScanSet
     >>> s = ScanSet(np.array([[1.0]], np.float32), 0.0, 0.0, 0.1, 5.0, np.zeros((1, 3)), np.zeros(1))

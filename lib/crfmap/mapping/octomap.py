@@ -1,17 +1,16 @@
 """OctoMap's occupancy update (Hornung et al. 2013) on a 2-D grid: the ``octomap`` peer.
 
-What OctoMap does with one scan (``OccupancyOcTreeBase::insertPointCloud`` with its defaults,
-``computeUpdate``; read from OctoMap's source, OctoMap/octomap):
+What OctoMap does with one scan (``OccupancyOcTreeBase::insertPointCloud`` with its defaults, ``computeUpdate``; read
+from OctoMap's source, OctoMap/octomap):
 
-1. every returned beam's end point marks its cell *occupied*; the cells the beam crosses on the
-   way, from the sensor's cell up to but excluding the end cell, are *free*. The crossed cells
-   are those of Amanatides & Woo's voxel traversal (``computeRayKeys``): every cell the segment
-   enters, 4-connected in 2-D (Bresenham's 8-connected line skips corner cells);
-2. the free and occupied sets are sets: a cell many beams pass is updated once per scan; a
-   cell that is both free and occupied in the same scan counts as occupied only;
-3. each free cell gets ``l += logit(p_miss)``, each occupied one ``l += logit(p_hit)``, and
-   ``l`` is then clamped to ``[logit(clamp_min), logit(clamp_max)]`` (``updateNodeLogOdds``),
-   in float32 like OctoMap's nodes. Never-updated cells stay unknown (P = 0.5).
+1. every returned beam's end point marks its cell *occupied*; the cells the beam crosses on the way, from the sensor's
+   cell up to but excluding the end cell, are *free*: those of Amanatides & Woo's voxel traversal
+   (``computeRayKeys``), every cell the segment enters, 4-connected in 2-D (Bresenham's line skips corner cells);
+2. the free and occupied sets are sets: a cell many beams pass is updated once per scan; a cell both free and occupied
+   in the same scan counts as occupied only;
+3. each free cell gets ``l += logit(p_miss)``, each occupied one ``l += logit(p_hit)``, then ``l`` is clamped to
+   ``[logit(clamp_min), logit(clamp_max)]`` (``updateNodeLogOdds``), in float32 like OctoMap's nodes. Never-updated
+   cells stay unknown (P = 0.5).
 
 This is this project's implementation of OctoMap's update, not the OctoMap library: the tests check it against the
 library (through octomap-python) on the same rays, cell by cell. Defaults are OctoMap's; the ``octomap`` peer row
@@ -46,12 +45,11 @@ CLAMP_MAX = 0.971  # log-odds +3.5
 
 @njit(cache=True, nogil=True)
 def _ray_cells(u0, v0, u1, v1, width, height, out):
-    """Cells (x, y) OctoMap's ``computeRayKeys`` lists from (u0, v0) to (u1, v1) [cell units].
+    """Cells (x, y) OctoMap's ``computeRayKeys`` lists from (u0, v0) to (u1, v1) [cell units]; returns the count.
 
-    The start cell and every cell the segment then enters, excluding the end cell; the walk also
-    stops on leaving the grid or when it overshoots the segment's length (OctoMap's guard against
-    rounding). Ties (a corner) step in y, as OctoMap's minimum over (x, y, z) does. Returns the count.
-    """
+    The start cell and every cell the segment then enters, excluding the end cell; the walk also stops on leaving the
+    grid or when it overshoots the segment's length (OctoMap's guard against rounding). Ties (a corner) step in y, as
+    OctoMap's minimum over (x, y, z) does."""
     x, y = int(math.floor(u0)), int(math.floor(v0))
     xe, ye = int(math.floor(u1)), int(math.floor(v1))
     if x == xe and y == ye:

@@ -1,15 +1,12 @@
 """Online mapping: integrate laser scans one by one, keep the CRF's beliefs fresh around the robot.
 
 Thesis sec. 3.4.4 bounds message passing to a disc around the robot so LBP can run while mapping.
-:class:`OnlineMapper` keeps the hit counts of the arctan grid and the LBP messages between scans.
-:meth:`OnlineMapper.integrate` adds one scan's hits (the grid builder's own ray casting), refreshes the observation
-of every cell a beam passed, and runs checkerboard LBP on the cells within ``radius`` of the laser, warm-started
-from the messages the previous scans left. :meth:`OnlineMapper.finish` runs LBP on the whole grid to convergence,
-which gives the preset's offline refinement of the same scans when LBP has one fixed point.
+:class:`OnlineMapper` keeps the arctan grid's hit counts and the LBP messages between scans: a scan's hits (the
+builder's own ray casting) refresh the observations of the cells it touched, then LBP runs on the disc, warm-started.
+:meth:`OnlineMapper.finish` is the preset's offline refinement of the same scans when LBP has one fixed point.
 
-The CRF is a preset (:mod:`crfmap.crf.presets`), as for ``crfmap infer``. Hard evidence never arises here: every
-preset's observation lies strictly inside (0, 1), and no link table (no all-zero row) makes such a cell certain
-(:mod:`crfmap.crf.model.evidence`), so nothing is clamped.
+The CRF is a preset (:mod:`crfmap.crf.presets`). Hard evidence never arises: every preset's observation lies strictly
+inside (0, 1), which no link table (no all-zero row) makes certain, so nothing is clamped.
 
 >>> import numpy as np
 >>> from crfmap.recording import ScanSet
@@ -86,13 +83,8 @@ class OnlineMapper:
     or holding earlier scans); :meth:`for_scans` and :meth:`for_sensor` make one. ``preset``, ``hidden``, ``link``,
     ``pairing``, ``margin``: the CRF (:func:`mapper_preset`). LBP runs on the cells whose centres lie within
     ``radius`` [m] of the laser, for at most ``max_iter`` iterations per scan (fewer once the largest message change
-    falls below ``tol``).
-
-    With a margin only cells within ``margin`` cells (Chebyshev) of an observed cell send messages, as with
-    ``region=near_known(grid, margin)`` in :func:`crfmap.crf.inference.lbp.infer`: gaps up to ``margin`` cells deep
-    are filled and the unexplored rest stays 0.5. None: every cell in the disc sends (the thesis's model; with a
-    strong coupling it fills unexplored space with its border's state).
-    """
+    falls below ``tol``). ``margin``: as :class:`~crfmap.crf.engine.incremental.IncrementalLBP`'s (None: every cell
+    in the disc sends, the thesis's model; :func:`~crfmap.crf.inference.regions.near_known` says why not)."""
 
     def __init__(self, hits: builder.HitCounter, preset=None, *, hidden=None, link=None, pairing=None,
                  margin=PRESET_MARGIN, radius=DEFAULT_RADIUS, max_iter=DEFAULT_MAX_ITER, tol=1e-4, dtype=np.float32):
@@ -204,10 +196,8 @@ class OnlineMapper:
         return self.hits.grid()
 
     def region(self) -> np.ndarray:
-        """Boolean [y, x] mask of the cells allowed to send: near an observed cell (all without a margin).
-
-        ``infer(observations, region=mapper.region())`` is the offline run :meth:`finish` matches.
-        """
+        """Boolean [y, x] mask of the cells allowed to send: near an observed cell (all without a margin);
+        ``infer(observations, region=mapper.region())`` is the offline run :meth:`finish` matches."""
         if self.margin is None:
             return np.ones((self.height, self.width), bool)
         observed = (self.hits.occupied > 0) | (self.hits.empty > 0)
