@@ -358,12 +358,11 @@ def _trapezoid(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, y
 @njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _pass(msg, un, act, lo_k, hi_k, segs, nseg, tile_h, h, w, co, lo, hi, edges, iterations, measure_from, cb,
           uniform_start, stage, bel, with_beliefs):
-    """Stage ``stage`` of ``iterations`` checkerboard iterations over the bands of rows between ``edges``.
-
-    A pass is stage 0 (the trapezoid of every band, on numba's threads), then stage 1 (the inverted trapezoids
-    between bands). Rows outside [edges[0], edges[-1]) must hold no sender. Iterations from ``measure_from`` on are
-    measured (max-accumulated into ``cb``); ``uniform_start``: the red cells' first half-sweep loads no message.
-    ``with_beliefs`` (every cell sends): the beliefs after the pass into ``bel`` [h, w], row by row while in cache."""
+    """Stage ``stage`` (0: every band's trapezoid, on numba's threads; 1: the inverted ones between bands) of
+    ``iterations`` checkerboard iterations over the bands of rows between ``edges``; rows outside [edges[0], edges[-1])
+    must hold no sender. Iterations from ``measure_from`` on are measured (max-accumulated into ``cb``);
+    ``uniform_start``: the red cells' first half-sweep loads no message. ``with_beliefs`` (every cell sends): the
+    beliefs after the pass into ``bel`` [h, w], row by row while in cache."""
     phases = 2 * iterations
     nb = edges.shape[0] - 1
     for b in prange(nb - stage):

@@ -21,8 +21,7 @@ from crfmap.crf.engine._message_update import NO_MASK, _pass, _tile_max
 from crfmap.crf.engine.progress import passed
 from crfmap.crf.threads import over_rows, run_all
 
-PASS_ITERATIONS = 16  # iterations per pass at most (temporal blocking depth): the message change is measured
-# on the last of each pass, so a run may do up to PASS_ITERATIONS - 1 iterations more than it needed
+PASS_ITERATIONS = 16  # iterations per pass at most (temporal blocking depth); each pass measures its last
 SERIAL_CELLS = 1 << 15  # blocks with fewer senders run on one thread (no thread start-up per pass)
 TILE_ROWS = 16  # [cells] tiles for measuring changes and freezing settled parts of the grid
 TILE_COLS = 32  # [cells] narrow tiles freeze settled parts sooner (fewer cell updates on large noisy maps)

@@ -64,9 +64,8 @@ def _doubled(stack, top):
 
 @njit(cache=True)
 def _propagate(state, forced, senders, use_senders, steps):
-    """Unit propagation of certainty through hidden tables with zeros (depth first, in place), with ``forced`` of
-    :func:`forced_states`: (flat index of a contradicting cell, of the certain neighbour that forces it), or (-1, -1).
-    """
+    """Unit propagation of certainty through hidden tables with zeros (depth first, in place; ``forced``:
+    :func:`forced_states`): (flat index of a contradicting cell, of the certain neighbour forcing it) or (-1, -1)."""
     h, w = state.shape
     stack = np.empty(1024, np.int64)
     top = 0
