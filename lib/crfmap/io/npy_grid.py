@@ -18,8 +18,7 @@ from crfmap.grid import OccupancyGrid, check_probability_array
 
 
 def npy_sidecar_path(npy_path) -> Path:
-    """The sidecar of an ``.npy`` grid: ``map.npy`` -> ``map.npy.yaml`` (``map.yaml`` would clash with a map_server
-    map)."""
+    """The sidecar of ``map.npy``: ``map.npy.yaml`` (``map.yaml`` would clash with a map_server map)."""
     npy_path = Path(npy_path)
     return npy_path.with_name(npy_path.name + ".yaml")
 

@@ -2,12 +2,10 @@
 
 rosbags serializes the messages; the files follow ros2/rosbag2's source: ``sqlite_storage.cpp``
 (``rosbag2_storage_default_plugins`` on humble, ``rosbag2_storage_sqlite3`` on jazzy), ``mcap_storage.cpp``,
-``rosbag2_storage/.../metadata_io.cpp``. What differs between humble and jazzy (metadata version, sqlite3 schema
-and tables, MCAP metadata) is tabled in the README (Use, "Bags"); the constants below and each writer hold it.
-
-MCAP files (``mcap`` library): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time = publish time,
-uncompressed chunks, summary and indexes.
-"""
+``rosbag2_storage/.../metadata_io.cpp``. What differs between humble and jazzy (metadata version, sqlite3 schema and
+tables, MCAP metadata) is tabled in the README (Handing a refined map to nav2, "Bags"); the constants below and each
+writer hold it. MCAP files (``mcap`` library): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time =
+publish time, uncompressed chunks, summary and indexes."""
 from __future__ import annotations
 
 import sqlite3
