@@ -1,8 +1,7 @@
 """Write files so that nothing is ever half-written: a temporary file, then a rename.
 
 While a temporary exists, SIGTERM and SIGHUP (like SIGINT) raise :class:`Interrupted` in the main thread, so the
-clean-up removes it (their default action would kill the process and leave ``.name.xxxx.tmp`` behind).
-"""
+clean-up removes it (their default action would kill the process and leave ``.name.xxxx.tmp`` behind)."""
 from __future__ import annotations
 
 import contextlib

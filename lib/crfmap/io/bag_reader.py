@@ -2,8 +2,7 @@
 
 Every scan is placed in a fixed frame by composing the transform chain at its header stamp (REP 105: map -> odom ->
 base_link -> laser; :class:`crfmap.frames.TfTree`). Ranges are kept as recorded (REP 117 filtering is the grid
-builder's job). Writing is :mod:`crfmap.io.bag_writer`.
-"""
+builder's job). Writing is :mod:`crfmap.io.bag_writer`."""
 from __future__ import annotations
 
 import math

@@ -4,8 +4,7 @@ free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads load
 Loading follows nav2_map_server's ``map_io.cpp`` (``loadMapYaml`` + ``loadMapFromFile``) value for value, with
 Jazzy+'s or Humble's pixel rules (:mod:`crfmap.io.nav2_loader`); saving follows its ``saveMapToFile``. A loaded grid
 holds the OccupancyGrid values map_server would publish, divided by 100 (unknown, -1, becomes 0.5). Exact grids are
-``.npy`` files (:mod:`crfmap.io.npy_grid`); :mod:`crfmap.io.grid_files` chooses by suffix.
-"""
+``.npy`` files (:mod:`crfmap.io.npy_grid`); :mod:`crfmap.io.grid_files` chooses by suffix."""
 from __future__ import annotations
 
 import json
@@ -55,11 +54,9 @@ def _check_thresholds(occupied, free, source):
 
 def read_map_yaml(yaml_path) -> dict:
     """Parse and check a map_server YAML file, as nav2's ``loadMapYaml`` does; all keys but ``mode`` are required.
-
     Returns the keys (``origin`` as 3 floats, ``negate`` 0/1, ``mode`` default ``"trinary"``), plus ``image_path``
     (relative to the YAML's folder) and ``extra`` (any other keys). Stricter than nav2: ``negate`` must be
-    0/1/true/false, thresholds lie in [0, 1] with free < occupied, resolution is positive.
-    """
+    0/1/true/false, thresholds lie in [0, 1] with free < occupied, resolution is positive."""
     path = check_path_arg(yaml_path, "map YAML file name", file=True)
     doc = read_mapping(path, "map YAML file")
     for key in _REQUIRED_KEYS:
@@ -200,9 +197,8 @@ def pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
     """nav2's ``tryWriteMapToFile`` per-cell rule: (grey uint8, alpha uint8 or None), top row first.
 
     Trinary: ``v <= rint(100 free)`` -> 254, ``v >= rint(100 occupied)`` -> 0, else and unknown -> 205. Scale: grey
-    ``(100 - v) / 100``, unknown -> grey 0.5 and transparent (GraphicsMagick may round a tie to the other grey
-    level; the value read back is the same). Raw: grey ``v``, unknown -> 255.
-    """
+    ``(100 - v) / 100``, unknown -> grey 0.5 and transparent (GraphicsMagick may round a tie to the other grey level;
+    the value read back is the same). Raw: grey ``v``, unknown -> 255."""
     v = np.asarray(values, dtype=np.int16)[::-1]  # image rows: top row = highest y
     unknown = (v < 0) | (v > 100)
     if mode == "trinary":

@@ -1,8 +1,7 @@
 """Occupancy grids as exact ``.npy`` files: the float P(occupied) array [y, x], bit for bit.
 
 A plain ``.npy`` cannot hold where the grid lies, so a sidecar YAML beside it, ``<name>.npy.yaml``, holds
-``resolution``, ``origin`` and ``frame_id``.
-"""
+``resolution``, ``origin`` and ``frame_id``."""
 from __future__ import annotations
 
 import json

@@ -59,10 +59,8 @@ class Topic:
 
 
 def write_rosbag2(folder: Path, name, messages, topics, storage, distro):
-    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` into the existing empty ``folder``.
-
-    ``messages``: (stamp [ns], topic name, CDR bytes) in time order; ``topics``: {name: :class:`Topic`}, in order.
-    """
+    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` into the existing empty ``folder``; ``messages``:
+    (stamp [ns], topic name, CDR bytes) in time order; ``topics``: {name: :class:`Topic`}, in order."""
     data_name = f"{name}_0{STORAGE_SUFFIX[storage]}"
     for _, topic, _ in messages:
         topics[topic].count += 1

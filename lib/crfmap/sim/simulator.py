@@ -145,8 +145,7 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
 
     Returns ``scans`` (true laser poses in map), ``odometry`` (base_link in odom, noisy, twists = measured),
     ``true_poses`` (base_link in map), ``cmd_vel`` (twists = commanded), ``laser_mount``, ``ground_truth =
-    scene.truth`` and ``meta`` (all settings, ``map_to_odom``). Identical for identical arguments.
-    """
+    scene.truth`` and ``meta`` (all settings, ``map_to_odom``). Identical for identical arguments."""
     for name in misplaced:
         if name in DRIVE_SETTINGS:
             raise InputError(name, f"belongs to the drive: pass drive={DRIVE_SETTINGS[name]}({name}=...)")
