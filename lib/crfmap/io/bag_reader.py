@@ -254,8 +254,7 @@ def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Rec
     ``"tf"`` (map -> odom -> base_link, or odom -> base_link), ``"odom"`` (``/odom``), ``"truth"``
     (``/ground_truth_pose``) or ``"auto"``, the first available in that order. ``laser_mount`` (x, y, yaw) overrides
     ``/tf_static``. ``scans.laser_poses`` are in ``scans.frame_id`` (map or odom); scans outside the pose track's time
-    span are dropped; ``meta`` says which pose source was used and how many scans were dropped.
-    """
+    span are dropped; ``meta`` says which pose source was used and how many scans were dropped."""
     path = check_path_arg(path, "bag file or folder")
     if pose_source not in POSE_SOURCES:
         raise InputError("pose_source", f"expected one of {', '.join(POSE_SOURCES)}, got {pose_source!r}")

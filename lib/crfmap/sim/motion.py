@@ -194,11 +194,10 @@ def _step(x, y, yaw, v, w, dt, free, ox, oy, c, s, res):
 
 def follow_waypoints(scene: Scene, laser: Laser, waypoints=None, *, start=None, robot_radius=None, dt=0.1,
                      linear_speed=0.5, angular_speed=1.5, scan_period=0.2, max_steps=1_000_000) -> Motion:
-    """Drive through ``waypoints`` (x, y) [m] in order, scanning every ``scan_period`` seconds.
-
-    Between waypoints the robot follows the shortest grid path (8-connected, footprint respected), shortened to
-    straight free segments. The controller sees the true pose: it turns in place towards the next point when off by
-    more than ``ALIGNED`` rad, else drives at up to ``linear_speed`` while steering (``w = heading error / dt``).
+    """Drive through ``waypoints`` (x, y) [m] in order, scanning every ``scan_period`` seconds, along the shortest grid
+    path (8-connected, footprint respected) shortened to straight free segments. The controller sees the true pose: it
+    turns in place towards the next point when off by more than ``ALIGNED`` rad, else drives at up to ``linear_speed``
+    while steering (``w = heading error / dt``).
 
     >>> from crfmap.world.scenes import office_floor
     >>> from crfmap.sim.laser import Laser
