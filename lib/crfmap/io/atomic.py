@@ -1,8 +1,7 @@
 """Write files so that nothing is ever half-written: a temporary file, then a rename.
 
 While a temporary exists, SIGTERM and SIGHUP (like SIGINT) raise :class:`Interrupted` in the main thread, so the
-clean-up removes it (their default action would kill the process and leave ``.name.xxxx.tmp`` behind).
-"""
+clean-up removes it (their default action would kill the process and leave ``.name.xxxx.tmp`` behind)."""
 from __future__ import annotations
 
 import contextlib
@@ -54,11 +53,9 @@ def signals_raise():
 
 @contextlib.contextmanager
 def _signals_deferred():
-    """Hold SIGTERM/SIGHUP/SIGINT back while a temporary is created and registered for clean-up.
-
-    ``pthread_sigmask`` is not enough (another thread, e.g. numba's, may take the signal and Python still runs the
-    handler in the main thread), so the handlers only note it and the one in force runs after the block.
-    """
+    """Hold SIGTERM/SIGHUP/SIGINT back while a temporary is created and registered for clean-up: the handlers only note
+    a signal, and the one in force runs after the block (``pthread_sigmask`` is not enough: another thread, e.g.
+    numba's, may take the signal and Python still runs the handler in the main thread)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -83,8 +80,7 @@ _RECORDERS = []  # lists that record_written() blocks collect each completed wri
 
 @contextlib.contextmanager
 def record_written():
-    """The list yielded collects the targets of every write this module completes in the block, so that a failure
-    after them can say what was written.
+    """Yields a list of the targets of every write completed in the block, so a later failure can say what was written.
 
     >>> with record_written() as written:
     ...     pass
@@ -142,10 +138,8 @@ def unit_lock(folder, exclusive):
 
 @contextlib.contextmanager
 def atomic_paths(*paths):
-    """Yield temporary paths beside ``paths``; on success rename all of them, as one unit, under :func:`unit_lock`.
-
-    On an exception (or SIGTERM/SIGHUP/SIGINT) every temporary is removed and the targets are left untouched.
-    """
+    """Yield temporary paths beside ``paths``; on success rename them all as one unit under :func:`unit_lock`; on an
+    exception (or SIGTERM/SIGHUP/SIGINT) remove every temporary, leaving the targets untouched."""
     paths = [Path(p) for p in paths]
     for path in paths:
         _check_target(path)

@@ -2,8 +2,7 @@
 
 Every scan is placed in a fixed frame by composing the transform chain at its header stamp (REP 105: map -> odom ->
 base_link -> laser; :class:`crfmap.frames.TfTree`). Ranges are kept as recorded (REP 117 filtering is the grid
-builder's job). Writing is :mod:`crfmap.io.bag_writer`.
-"""
+builder's job). Writing is :mod:`crfmap.io.bag_writer`."""
 from __future__ import annotations
 
 import math
@@ -91,10 +90,9 @@ READER_MODULES = ("rosbags", "backports", "compression", "lz4")  # rosbags and i
 
 
 def raised_by_reader(exc: BaseException) -> bool:
-    """Whether ``exc`` (an Exception) came out of the bag-reading libraries: its innermost Python frame is theirs.
-
-    A bag they cannot decode makes them raise what no list names (``ZstdError``, ``TypeError``): the bag's fault.
-    The same exception from crfmap's own code is not, and stays a traceback.
+    """Whether ``exc`` (an Exception) came out of the bag-reading libraries, its innermost Python frame theirs: a bag
+    they cannot decode makes them raise what no list names (``ZstdError``, ``TypeError``), the bag's fault; the same
+    exception from crfmap's own code stays a traceback.
 
     >>> raised_by_reader(ValueError("x"))  # never raised: no frame at all
     False
@@ -252,14 +250,11 @@ def _mount_on(c, path, laser_frame, base_frame, laser_mount):
 def read_bag(path, scan_topic=None, pose_source="auto", laser_mount=None) -> Recording:
     """Read a ROS1 ``.bag`` or a ROS2 bag folder (or its ``.db3``/``.mcap``/``metadata.yaml``) into a Recording.
 
-    ``scan_topic``: the LaserScan topic; by default the only one (or ``/scan``). ``pose_source``: where the laser poses
-    come from: ``"tf"`` the ``/tf`` tree (map -> odom -> base_link, or odom -> base_link), ``"odom"`` the ``/odom``
-    messages, ``"truth"`` ``/ground_truth_pose``; ``"auto"`` takes the first available in that order.
-    ``laser_mount`` (x, y, yaw): the laser's pose on the robot, overriding ``/tf_static``.
-
-    ``scans.laser_poses`` are in the fixed frame (``scans.frame_id``: map or odom); scans outside the pose track's
-    time span are dropped; ``meta`` says which pose source was used and how many scans were dropped.
-    """
+    ``scan_topic``: the LaserScan topic, by default the only one (or ``/scan``). ``pose_source`` of the laser poses:
+    ``"tf"`` (map -> odom -> base_link, or odom -> base_link), ``"odom"`` (``/odom``), ``"truth"``
+    (``/ground_truth_pose``) or ``"auto"``, the first available in that order. ``laser_mount`` (x, y, yaw) overrides
+    ``/tf_static``. ``scans.laser_poses`` are in ``scans.frame_id`` (map or odom); scans outside the pose track's time
+    span are dropped; ``meta`` says which pose source was used and how many scans were dropped."""
     path = check_path_arg(path, "bag file or folder")
     if pose_source not in POSE_SOURCES:
         raise InputError("pose_source", f"expected one of {', '.join(POSE_SOURCES)}, got {pose_source!r}")

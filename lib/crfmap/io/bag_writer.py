@@ -1,13 +1,11 @@
 """Write a :class:`~crfmap.recording.Recording` as a ROS 1 or ROS 2 bag, with ``rosbags`` (no ROS install).
 
-The topics a ROS user expects from a robot: ``/scan`` (LaserScan in the laser frame), ``/odom`` (odom -> base_link
-with twist), ``/cmd_vel``, ``/tf`` (map -> odom, odom -> base_link), ``/tf_static`` (base_link -> laser), and when
-known ``/ground_truth_pose`` (base_link in map) and ``/map`` (the ground truth). ``/tf_static`` and ``/map`` are
-latched (transient local), so a player's late subscriber still gets the laser mount and the map. The files are laid
-out as rosbag2 (:mod:`crfmap.io.rosbag2_files`) or rosbag (:mod:`crfmap.io.rosbag1_files`) writes them.
-
-No message carries time 0: ROS reads it as "no time" (tf2 looks up the latest transform, ``rosbag play`` skips it).
-"""
+Topics: ``/scan`` (LaserScan, laser frame), ``/odom`` (odom -> base_link with twist), ``/cmd_vel``, ``/tf`` (map ->
+odom, odom -> base_link), ``/tf_static`` (base_link -> laser), and when known ``/ground_truth_pose`` (base_link in map)
+and ``/map`` (the ground truth); ``/tf_static`` and ``/map`` are latched (transient local) for a player's late
+subscribers. Files are laid out as rosbag2 (:mod:`crfmap.io.rosbag2_files`) or rosbag (:mod:`crfmap.io.rosbag1_files`)
+writes them. No message carries time 0: ROS reads it as "no time" (tf2 looks up the latest transform, ``rosbag play``
+skips it)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -71,11 +69,9 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble", prog
 
     ``storage``: ``"mcap"`` or ``"sqlite3"`` (``NAME_0.mcap`` / ``NAME_0.db3``). ``distro``: whose rosbag2 files to
     write: ``"humble"`` (every later rosbag2 reads them) or ``"jazzy"`` (Humble cannot). ``progress``: a tqdm bar.
-
-    ``/tf`` holds odom -> base_link at every odometry and scan stamp (interpolated) and map -> odom at every scan
-    stamp, so that map -> odom -> base_link -> laser is exactly each scan's recorded laser pose. Without odometry,
-    map -> odom is the identity and odom -> base_link the true pose. InputError for a message at time 0.
-    """
+    ``/tf`` holds odom -> base_link at every odometry and scan stamp (interpolated) and map -> odom at every scan stamp,
+    so that map -> odom -> base_link -> laser is exactly each scan's recorded laser pose (without odometry, map -> odom
+    is the identity and odom -> base_link the true pose). InputError for a message at time 0."""
     path = Path(path)
     if fmt not in ("ros2", "ros1"):
         raise InputError("format", f"expected 'ros2' or 'ros1', got {fmt!r}")
@@ -119,7 +115,6 @@ def write_bag(recording, path, fmt="ros2", storage="mcap", distro="humble", prog
 
 
 def _bar(messages, progress):
-    """``messages``, through a tqdm bar when ``progress``."""
     if not progress:
         return messages
     from tqdm.auto import tqdm

@@ -7,12 +7,10 @@ A CARMEN log is text, one message per line (optionally gzip-compressed)::
     PARAM  name value ...
 
 The n beams span 180 degrees counter-clockwise from the robot's right: ``angle_k = -pi/2 + k * pi / (n - 1)``. In
-the "corrected" logs both pose triples of a FLASER line hold the SLAM-corrected pose, our laser pose (zero mount).
-ODOM lines are the raw odometry track. FLASER lines keep their stamps as logged (a few run back by a tenth of a
-second: each is its own /tf knot, so the scans still resolve to their poses). Other messages are skipped and counted.
-
-Readings at or beyond the laser's maximum range are "no return" codes (not one exact number: 81.83 m in Intel,
-50.00 m in ACES) and become ``+inf`` (REP 117), never hits: see :mod:`crfmap.io.no_return`.
+"corrected" logs both pose triples of a FLASER line hold the SLAM-corrected pose, our laser pose (zero mount); ODOM
+lines are the raw odometry. FLASER stamps are kept as logged (a few run back by a tenth of a second: each is its own /tf
+knot, so the scans still resolve to their poses). Other messages are skipped and counted. Readings at or beyond the
+laser's maximum range are "no return" codes, which become ``+inf`` (REP 117), never hits (:mod:`crfmap.io.no_return`).
 """
 from __future__ import annotations
 
@@ -119,10 +117,8 @@ _UNSET = object()
 
 
 def clean_odometry_stamps(stamps) -> np.ndarray:
-    """Which odometry records to keep: a stamp above 0 ns and above every earlier kept one.
-
-    Logs have corrupt ODOM stamps (0, or running back by seconds): as ROS messages, odometry at "no time" and tf
-    going back in time.
+    """Which odometry records to keep: a stamp above 0 ns and above every earlier kept one (logs have corrupt ODOM
+    stamps, 0 or running back by seconds: as ROS messages, odometry at "no time" and tf going back in time).
 
     >>> clean_odometry_stamps(np.array([0.5, 0.0, 0.7, 0.6, 0.7, 0.9])).tolist()
     [True, False, True, False, False, True]
@@ -153,12 +149,10 @@ def read_carmen(path, max_range="auto", no_return=_UNSET, warn=True) -> Recordin
 
     ``max_range`` [m]: readings at or beyond it (less ``NO_RETURN_TOLERANCE``) become ``+inf``; ``"auto"``: the log's
     ``PARAM robot_front_laser_max``, else :func:`crfmap.io.no_return.no_return_rule`; None keeps every reading.
-    ``no_return``: the older name of ``max_range``. ``warn``: warn of dropped ODOM records
-    (:func:`clean_odometry_stamps`) and of moves their stamps cannot explain (:func:`odometry_jumps`, kept).
-
-    ``scans`` and ``true_poses`` hold the corrected FLASER poses in ``map``, ``odometry`` the ODOM lines with twists;
-    ``meta`` the PARAM values, counts, the maximum range and where it came from.
-    """
+    ``no_return``: its older name. ``warn``: warn of dropped ODOM records (:func:`clean_odometry_stamps`) and of moves
+    their stamps cannot explain (:func:`odometry_jumps`, kept). ``scans`` and ``true_poses`` hold the corrected FLASER
+    poses in ``map``, ``odometry`` the ODOM lines with twists; ``meta`` the PARAM values, counts, the maximum range and
+    where it came from."""
     path = check_path_arg(path, "CARMEN log file name", file=True)
     text = _read_text(path)
     laser_rows, laser_lines = [], []

@@ -1,6 +1,5 @@
 """Checks on a map image from its header, before any pixel is decoded: a PNG of a few kilobytes can take gigabytes
-and a minute to decode. The limit is :func:`crfmap.checks.max_cells` (``crfmap --max-cells N``).
-"""
+and a minute to decode. The limit is :func:`crfmap.checks.max_cells` (``crfmap --max-cells N``)."""
 from __future__ import annotations
 
 import warnings

@@ -4,8 +4,7 @@ free_thresh``) beside a greyscale image (PGM or PNG; any image Pillow reads load
 Loading follows nav2_map_server's ``map_io.cpp`` (``loadMapYaml`` + ``loadMapFromFile``) value for value, with
 Jazzy+'s or Humble's pixel rules (:mod:`crfmap.io.nav2_loader`); saving follows its ``saveMapToFile``. A loaded grid
 holds the OccupancyGrid values map_server would publish, divided by 100 (unknown, -1, becomes 0.5). Exact grids are
-``.npy`` files (:mod:`crfmap.io.npy_grid`); :mod:`crfmap.io.grid_files` chooses by suffix.
-"""
+``.npy`` files (:mod:`crfmap.io.npy_grid`); :mod:`crfmap.io.grid_files` chooses by suffix."""
 from __future__ import annotations
 
 import json
@@ -55,11 +54,9 @@ def _check_thresholds(occupied, free, source):
 
 def read_map_yaml(yaml_path) -> dict:
     """Parse and check a map_server YAML file, as nav2's ``loadMapYaml`` does; all keys but ``mode`` are required.
-
     Returns the keys (``origin`` as 3 floats, ``negate`` 0/1, ``mode`` default ``"trinary"``), plus ``image_path``
     (relative to the YAML's folder) and ``extra`` (any other keys). Stricter than nav2: ``negate`` must be
-    0/1/true/false, thresholds lie in [0, 1] with free < occupied, resolution is positive.
-    """
+    0/1/true/false, thresholds lie in [0, 1] with free < occupied, resolution is positive."""
     path = check_path_arg(yaml_path, "map YAML file name", file=True)
     doc = read_mapping(path, "map YAML file")
     for key in _REQUIRED_KEYS:
@@ -118,13 +115,11 @@ def _check_pnm_header(image_path, source, context):
 
 
 def _check_image_header(image_path, source, context):
-    """Size and kind from the header before decoding (crfmap.io.image_guard), then PNM's own header."""
     check_map_image(image_path, context)
     _check_pnm_header(image_path, source, context)
 
 
 def _optional_thresh(name, value):
-    """A threshold argument: None (the file's) or a number in [0, 1]; InputError naming ``name`` otherwise."""
     if value is None:
         return None
     return check_number(name, value, low=0.0, high=1.0)
@@ -134,15 +129,11 @@ def load_map(yaml_path, *, occupied_thresh=None, free_thresh=None, loader=DEFAUL
     """Load a map_server map (YAML + image) exactly as nav2's map_server would publish it.
 
     ``loader``: ``"jazzy"`` (default: Jazzy, Kilted, Rolling) or ``"humble"``, whose per-pixel rules differ
-    (:mod:`crfmap.io.nav2_loader`). The top image row is the highest y; cell (0, 0) sits at ``origin``. A value of 50
-    loads as P just above 0.5, so that it stays a known 50 (crfmap's P = 0.5 means unknown).
-
-    ``occupied_thresh`` / ``free_thresh`` override the file's (loading only): e.g. ``free_thresh=0.196`` keeps the
-    unknown pixels (205) of a Humble map (``free_thresh: 0.25``) unknown. ``grid.meta`` holds the YAML's keys as
+    (:mod:`crfmap.io.nav2_loader`). The top image row is the highest y; cell (0, 0) sits at ``origin``; a value of 50
+    stays a known 50 (:func:`grid_from_values`). ``occupied_thresh`` / ``free_thresh`` override the file's, e.g.
+    ``free_thresh=0.196`` keeps a Humble map's unknown pixels (205) unknown. ``grid.meta`` holds the YAML's keys as
     stated, plus ``source``, ``image_path`` and ``loader``, so that :func:`save_map` can write the same kind of map.
-
-    InputError naming the file for a missing or bad YAML or key, and a missing, unreadable, truncated or empty image.
-    """
+    InputError naming the file for a missing or bad YAML or key, and a missing, unreadable, truncated or empty image."""
     if loader not in LOADERS:
         raise InputError("--loader", f"unknown nav2 loader {loader!r} (expected one of {', '.join(LOADERS)})")
     occ_t = _optional_thresh("occupied_thresh", occupied_thresh)
@@ -206,9 +197,8 @@ def pixels_from_occupancy(values, mode, occupied_thresh, free_thresh):
     """nav2's ``tryWriteMapToFile`` per-cell rule: (grey uint8, alpha uint8 or None), top row first.
 
     Trinary: ``v <= rint(100 free)`` -> 254, ``v >= rint(100 occupied)`` -> 0, else and unknown -> 205. Scale: grey
-    ``(100 - v) / 100``, unknown -> grey 0.5 and transparent (GraphicsMagick may round a tie to the other grey
-    level; the value read back is the same). Raw: grey ``v``, unknown -> 255.
-    """
+    ``(100 - v) / 100``, unknown -> grey 0.5 and transparent (GraphicsMagick may round a tie to the other grey level;
+    the value read back is the same). Raw: grey ``v``, unknown -> 255."""
     v = np.asarray(values, dtype=np.int16)[::-1]  # image rows: top row = highest y
     unknown = (v < 0) | (v > 100)
     if mode == "trinary":
@@ -270,16 +260,13 @@ def save_map(grid: OccupancyGrid, yaml_path, mode=None, occupied_thresh=None, fr
              image_format=None, saver="humble"):
     """Write ``grid`` as a map_server map, as nav2's map_saver does; returns (yaml_path, image_path).
 
-    The image is ``<yaml stem>.<image_format>`` beside the YAML; ``negate`` is 0; cells are ``grid.to_int8()``.
-    Defaults (``None``): ``mode`` and, for the same mode, thresholds and image format from ``grid.meta`` (a loaded map
-    writes back unchanged), else trinary, 0.65 / 0.196 and pgm. Scale uses 1.0 / 0.0, which makes the grey image
-    lossless (every int8 value reloads exactly), and png: only PNG keeps the alpha that marks unknown (a scale PGM's
-    unknown reloads as 50, P = 0.5). A trinary map reloads unchanged when ``free_thresh <= 0.196`` and
-    ``occupied_thresh < 1``.
-
-    ``saver``: ``"humble"`` writes the thresholds used into the YAML, as Humble's map_saver does; ``"jazzy"`` writes a
-    trinary YAML with 0.65 / 0.196 whatever classified the cells (map_saver since navigation2 PR #5278).
-    """
+    The image is ``<yaml stem>.<image_format>`` beside the YAML; ``negate`` is 0; cells are ``grid.to_int8()``. Defaults
+    (``None``): ``mode`` and, for the same mode, thresholds and image format from ``grid.meta`` (a loaded map writes
+    back unchanged), else trinary, 0.65 / 0.196 and pgm. Scale uses :data:`SCALE_THRESHOLDS` and png: only PNG keeps the
+    alpha that marks unknown (a scale PGM's unknown reloads as 50, P = 0.5). A trinary map reloads unchanged when
+    ``free_thresh <= 0.196`` and ``occupied_thresh < 1``. ``saver``: ``"humble"`` writes the thresholds used into the
+    YAML, as Humble's map_saver does; ``"jazzy"`` writes a trinary YAML with 0.65 / 0.196 whatever classified the cells
+    (map_saver since navigation2 PR #5278)."""
     yaml_path = Path(yaml_path)
     if yaml_path.suffix.lower() not in MAP_SUFFIXES:
         raise InputError(yaml_path, "a map_server map file must end in .yaml or .yml")

@@ -1,8 +1,8 @@
 """What nav2's costmap makes of a map: ``nav2_costmap_2d``'s static layer, ``interpretValue``.
 
-The static layer reads each OccupancyGrid value as an unsigned char (so -1 is 255) and,
-with nav2's defaults (``lethal_cost_threshold`` 100, ``trinary_costmap`` true,
-``unknown_cost_value`` 255, ``track_unknown_space`` true as in nav2's shipped parameters):
+The static layer reads each OccupancyGrid value as an unsigned char (so -1 is 255) and, with nav2's defaults
+(``lethal_cost_threshold`` 100, ``trinary_costmap`` true, ``unknown_cost_value`` 255, ``track_unknown_space`` true as in
+nav2's shipped parameters):
 
 - ``value == unknown_cost_value`` -> NO_INFORMATION (255), or FREE (0) without unknown tracking;
 - ``value >= lethal_cost_threshold`` -> LETHAL_OBSTACLE (254);
@@ -47,7 +47,6 @@ def nav2_counts(values, **costmap_options) -> dict:
 
 
 def describe_for_nav2(values, **costmap_options) -> str:
-    """One line: "N occupied, M free, K unknown cells under nav2's defaults"."""
     c = nav2_counts(values, **costmap_options)
     return f"{c['occupied']} occupied, {c['free']} free, {c['unknown']} unknown cells under nav2's defaults"
 

@@ -1,8 +1,7 @@
 """What nav2 reads from a map crfmap makes: the OccupancyGrid values map_server publishes from the trinary file.
 
 nav2's costmap (``trinary_costmap: true``, ``lethal_cost_threshold: 100``) reads every value below 100 as free, so
-a map published in percent would open every wall; the live node publishes, and the navigation metrics score, these.
-"""
+a map published in percent would open every wall; the live node publishes, and the navigation metrics score, these."""
 from __future__ import annotations
 
 import functools

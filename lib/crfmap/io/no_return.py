@@ -2,8 +2,7 @@
 robot_front_laser_max``) nor the user (``--max-range``) names the maximum range: one rule, with its reasons.
 
 A CARMEN log writes "no return" as a reading at or beyond the maximum range, whose exact value varies within and
-across logs (81.83-81.91 m in SICK logs, 50.00 m in ACES, 51.05 and 51.10 m in one log).
-"""
+across logs (81.83-81.91 m in SICK logs, 50.00 m in ACES, 51.05 and 51.10 m in one log)."""
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,8 +1,7 @@
 """Occupancy grids as exact ``.npy`` files: the float P(occupied) array [y, x], bit for bit.
 
 A plain ``.npy`` cannot hold where the grid lies, so a sidecar YAML beside it, ``<name>.npy.yaml``, holds
-``resolution``, ``origin`` and ``frame_id``.
-"""
+``resolution``, ``origin`` and ``frame_id``."""
 from __future__ import annotations
 
 import json
@@ -18,8 +17,7 @@ from crfmap.grid import OccupancyGrid, check_probability_array
 
 
 def npy_sidecar_path(npy_path) -> Path:
-    """The sidecar of an ``.npy`` grid: ``map.npy`` -> ``map.npy.yaml`` (``map.yaml`` would clash with a map_server
-    map)."""
+    """The sidecar of ``map.npy``: ``map.npy.yaml`` (``map.yaml`` would clash with a map_server map)."""
     npy_path = Path(npy_path)
     return npy_path.with_name(npy_path.name + ".yaml")
 

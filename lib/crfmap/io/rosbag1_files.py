@@ -3,8 +3,7 @@
 rosbag (C++ ``Bag::writeFileHeaderRecord``, Python ``Bag._write_file_header_record``) pads the bag-header record's
 *data* to ``4096 - header length``: 4104 bytes with the two length fields. rosbags' Writer pads the whole record to
 4096, so rosbag's reindex and append, rewriting it in place, overwrite the first chunk's first 8 bytes.
-:class:`Rosbag1Writer` reserves rosbag's 4104 bytes and rewrites the record in rosbag's layout on close.
-"""
+:class:`Rosbag1Writer` reserves rosbag's 4104 bytes and rewrites the record in rosbag's layout on close."""
 from __future__ import annotations
 
 import struct

@@ -2,12 +2,10 @@
 
 rosbags serializes the messages; the files follow ros2/rosbag2's source: ``sqlite_storage.cpp``
 (``rosbag2_storage_default_plugins`` on humble, ``rosbag2_storage_sqlite3`` on jazzy), ``mcap_storage.cpp``,
-``rosbag2_storage/.../metadata_io.cpp``. What differs between humble and jazzy (metadata version, sqlite3 schema
-and tables, MCAP metadata) is tabled in the README (Use, "Bags"); the constants below and each writer hold it.
-
-MCAP files (``mcap`` library): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time = publish time,
-uncompressed chunks, summary and indexes.
-"""
+``rosbag2_storage/.../metadata_io.cpp``. What differs between humble and jazzy (metadata version, sqlite3 schema and
+tables, MCAP metadata) is tabled in the README (Handing a refined map to nav2, "Bags"); the constants below and each
+writer hold it. MCAP files (``mcap`` library): profile ``ros2``, schemas ``ros2msg``, messages ``cdr`` with log time =
+publish time, uncompressed chunks, summary and indexes."""
 from __future__ import annotations
 
 import sqlite3
@@ -61,10 +59,8 @@ class Topic:
 
 
 def write_rosbag2(folder: Path, name, messages, topics, storage, distro):
-    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` into the existing empty ``folder``.
-
-    ``messages``: (stamp [ns], topic name, CDR bytes) in time order; ``topics``: {name: :class:`Topic`}, in order.
-    """
+    """Write ``folder/NAME_0.{mcap,db3}`` and ``folder/metadata.yaml`` into the existing empty ``folder``; ``messages``:
+    (stamp [ns], topic name, CDR bytes) in time order; ``topics``: {name: :class:`Topic`}, in order."""
     data_name = f"{name}_0{STORAGE_SUFFIX[storage]}"
     for _, topic, _ in messages:
         topics[topic].count += 1

@@ -1,10 +1,8 @@
 """ROS 2 without a ROS install: the node's topics over Eclipse Cyclone DDS, on ROS 2's wire conventions.
 
 As rmw_cyclonedds_cpp (``create_readwrite_qos``, ``make_fqtopic``): domain ``ROS_DOMAIN_ID`` (default 0); ROS topic
-``/map`` is DDS topic ``rt/map`` of type ``nav_msgs::msg::dds_::OccupancyGrid_`` (:mod:`crfmap.ros.dds_types`);
-samples XCDR1, little-endian; QoS reliable (infinite blocking) or best effort, volatile or transient local with the
-durability service keeping the writer's history, liveliness automatic, no auto-dispose. No ``ros_discovery_info``:
-ROS 2 tools list the topics but not a node name.
+``/map`` is DDS topic ``rt/map`` of type ``nav_msgs::msg::dds_::OccupancyGrid_`` (:mod:`crfmap.ros.dds_types`); samples
+XCDR1, little-endian; QoS :func:`dds_qos`. No ``ros_discovery_info``: ROS 2 tools list the topics but not a node name.
 
 >>> ros_topic_name("/map"), ros_topic_name("scan")
 ('rt/map', 'rt/scan')
@@ -41,9 +39,8 @@ def domain_id(value=None) -> int:
 
 
 def dds_configuration(value=None) -> str | None:
-    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``), checked; None when unset or empty.
-
-    A comma-separated list of files (``file://`` or paths) and inline XML (``<...>``): a file that is missing or
+    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``), checked; None when unset or empty. A
+    comma-separated list of files (``file://`` or paths) and inline XML (``<...>``): a file that is missing or
     unreadable, or text that is neither, is an InputError now, not a ``DDSException`` without reason later.
 
     >>> dds_configuration("<CycloneDDS/>")
@@ -106,7 +103,9 @@ def _last_message(text: str) -> str:
 
 
 def dds_qos(profile: ros_qos.Profile, reader=False):
-    """The Cyclone DDS QoS of a :class:`crfmap.ros.qos.Profile` (rmw_cyclonedds_cpp's mapping)."""
+    """The Cyclone DDS QoS of a :class:`crfmap.ros.qos.Profile`, as rmw_cyclonedds_cpp maps it: reliable (infinite
+    blocking) or best effort, volatile or transient local with the durability service keeping the writer's history,
+    liveliness automatic, no auto-dispose."""
     from cyclonedds.qos import Policy, Qos
     from cyclonedds.util import duration
 

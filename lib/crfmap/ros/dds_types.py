@@ -1,8 +1,7 @@
 """The ROS 2 messages the node uses, as Cyclone DDS IDL types with ROS 2's wire names (needs ``crfmap[ros]``).
 
 ROS 2 maps ``pkg/msg/Name`` to the DDS type ``pkg::msg::dds_::Name_`` (rosidl's IDL), fields in ``.msg`` order,
-final extensibility: plain CDR (XCDR1). The field lists are Humble's (and Jazzy's: these messages did not change).
-"""
+final extensibility: plain CDR (XCDR1). The field lists are Humble's (and Jazzy's: these messages did not change)."""
 # no "from __future__ import annotations": cyclonedds reads the field types from the live annotations
 
 from dataclasses import dataclass, field

@@ -1,8 +1,7 @@
 """The messages the node exchanges, as plain values independent of the middleware, and their checks.
 
-Backends read any ROS 1 or ROS 2 message object by attribute (:func:`grid_message`, :func:`scan_message`,
-:func:`transforms_of`) and build their own from a :class:`GridMessage`. A message the node cannot use raises
-:class:`BadMessage`.
+Backends read ROS 1/2 message objects by attribute (:func:`grid_message`, :func:`scan_message`, :func:`transforms_of`)
+and build theirs from a :class:`GridMessage`; unusable messages raise :class:`BadMessage`.
 
 >>> g = GridMessage(stamp_ns=5, frame_id="map", map_load_ns=5, resolution=0.5, width=2, height=1,
 ...                 origin=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0), data=np.array([-1, 100], np.int8))

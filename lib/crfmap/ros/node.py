@@ -4,8 +4,7 @@ scans and tf (:class:`MapNode`).
 A message the node cannot use is skipped and logged once per kind with the reason (:class:`BadMessages`); no map is
 published from one. :func:`spin` runs a node over a backend, which only moves messages: ``subscribe(topic, kind, qos,
 callback)``, ``publisher(topic, kind, qos) -> send(GridMessage)``, ``spin_once(timeout)``, ``close()``; ``kind`` is
-'grid', 'metadata', 'scan' or 'tf'.
-"""
+'grid', 'metadata', 'scan' or 'tf'."""
 from __future__ import annotations
 
 import queue
@@ -40,7 +39,6 @@ def refine_grid(grid):
 
 
 def log_line(text):
-    """The node's log: one line on stderr."""
     print(f"crfmap node: {text}", file=sys.stderr, flush=True)
 
 
@@ -70,7 +68,6 @@ class Subscription:
 
 
 def check_values(values: str) -> str:
-    """The published values' mode, checked (one of :data:`crfmap.io.nav2_values.VALUE_MODES`)."""
     if values not in VALUE_MODES:
         raise InputError("values", f"must be one of {', '.join(VALUE_MODES)}, got {values!r}")
     return values
@@ -130,14 +127,11 @@ class RefineNode:
 
 
 class MapNode:
-    """Map online from ``scan_topic`` and tf; publish ``map_topic`` and ``metadata_topic`` at most once per ``period``.
-
-    Each scan is integrated at its own stamp once tf covers it (:class:`crfmap.ros.tf_buffer.TfBuffer`). ``bounds``
-    (xmin, ymin, xmax, ymax) [m] and ``resolution`` [m] fix the grid (it does not grow); ``fixed_frame`` None takes
-    the root of the tf tree at the first scan. ``mapper_options`` go to
-    :meth:`crfmap.mapping.OnlineMapper.for_sensor` (preset, radius, margin, ...). ``scan_log``: a file of one line per
-    integrated scan (stamp [ns], laser pose x y yaw in the fixed frame), so a published map can be rebuilt exactly.
-    """
+    """Map online from ``scan_topic`` and tf, each scan at its stamp once tf covers it (:mod:`crfmap.ros.tf_buffer`);
+    publish ``map_topic`` and ``metadata_topic`` at most once per ``period`` [s]. ``bounds`` (xmin, ymin, xmax, ymax)
+    [m] and ``resolution`` [m] fix the grid (it does not grow); ``fixed_frame`` None: the tf tree's root at the first
+    scan. ``mapper_options`` go to :meth:`crfmap.mapping.OnlineMapper.for_sensor`. ``scan_log``: a file of one line per
+    integrated scan (stamp [ns], laser pose x y yaw in the fixed frame), so a published map can be rebuilt exactly."""
 
     def __init__(self, bounds, resolution=0.05, scan_topic="/scan", map_topic="/map", metadata_topic="/map_metadata",
                  fixed_frame=None, period=1.0, mapper_options=None, log=log_line, max_waiting=1000, scan_log=None,
@@ -274,10 +268,8 @@ class MapNode:
 
 def spin(node, backend, stop, log=log_line):
     """Run ``node`` over ``backend`` until ``stop`` (a threading.Event) is set; returns the node's summary, with the
-    samples a backend lost in transport (``lost() -> {topic: count}``).
-
-    Callbacks only queue (some backends call them from their own threads): the node's state needs no lock.
-    """
+    samples a backend lost in transport (``lost() -> {topic: count}``). Callbacks only queue (some backends call them
+    from their own threads), so the node's state needs no lock."""
     inbox = queue.SimpleQueue()
     for sub in node.subscriptions:
         backend.subscribe(sub.topic, sub.kind, sub.profile, lambda msg, h=sub.handler: inbox.put((h, msg)))

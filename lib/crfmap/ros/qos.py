@@ -4,8 +4,7 @@
   such as nav2's costmap with ``map_subscribe_transient_local``, still gets the last map).
 - Scans: rclcpp's ``SensorDataQoS``; the node's reader keeps more (``reader_depth``, its own whatever the writer's),
   so a mapper busy with one scan loses none of the next.
-- ``/tf``, ``/tf_static``: tf2_ros's listener and broadcasters.
-"""
+- ``/tf``, ``/tf_static``: tf2_ros's listener and broadcasters."""
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,8 +1,7 @@
 """ROS 1: the node's topics through a running roscore with rospy (Debian: ``apt-get install python3-rospy``).
 
 Debian's ROS 1 lives in the system Python's ``dist-packages``; when ``rospy`` is not importable otherwise, that
-folder goes at the end of ``sys.path``, so crfmap's virtual environment uses it without a ROS workspace.
-"""
+folder goes at the end of ``sys.path``, so crfmap's virtual environment uses it without a ROS workspace."""
 from __future__ import annotations
 
 import gc

@@ -1,8 +1,7 @@
 """How :func:`crfmap.sim.simulator.simulate` drives the robot: one small settings object per mode.
 
-Each drive holds only the settings that apply to it, so a setting cannot be passed to a mode that would ignore it;
-what every drive shares (start pose, ``dt``, speed limits) stays a keyword of ``simulate``. A mode's name
-(``"explore"``, ``"look"``, ``"waypoints"``) means its drive with the defaults.
+Each drive holds only its own settings, so none can go to a mode that would ignore it; shared ones (start pose,
+``dt``, speed limits) are keywords of ``simulate``. A mode's name (``"explore"``, ...) means its drive's defaults.
 
 >>> drive_for("look")
 Look(turns=1)

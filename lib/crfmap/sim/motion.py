@@ -1,14 +1,11 @@
 """How the simulated robot moves: Twist commands, the true motion they cause, and the three drives.
 
-The robot follows Twist commands (v [m/s], w [rad/s]) at a fixed ``dt``; each step it turns by ``w * dt`` and moves
-``v * dt`` along the mean heading of the step. The true motion is the commanded one, except that a step whose
-straight path would put the robot on an occupied cell (or too near one for its radius) does not translate. A drive
-returns a :class:`Motion`: the commands, the executed (distance, turn) steps, the true poses and the steps at which
-the laser scans. :func:`crfmap.sim.simulator.simulate` turns it into odometry and scans.
-
-The drives: :func:`explore_reachable` (the thesis's "the robot has moved to every cell ... it can physically
-access"), :func:`look_around` (Fig. 28) and :func:`follow_waypoints`. A drive needs of the laser only how many scans
-cover a full turn (:meth:`crfmap.sim.laser.Laser.headings_per_turn`).
+The robot follows Twist commands (v [m/s], w [rad/s]) at a fixed ``dt``; each step turns by ``w * dt`` and moves
+``v * dt`` along the step's mean heading, but does not translate if its straight path would put the robot on an
+occupied cell (or too near one for its radius). The drives, :func:`explore_reachable` (the thesis's "the robot has
+moved to every cell ... it can physically access"), :func:`look_around` (Fig. 28) and :func:`follow_waypoints`,
+return a :class:`Motion`, which :func:`crfmap.sim.simulator.simulate` turns into odometry and scans. Of the laser a
+drive needs only how many scans cover a full turn (:meth:`crfmap.sim.laser.Laser.headings_per_turn`).
 
 >>> from crfmap.world.scenes import enclosed_boxes
 >>> from crfmap.sim.laser import Laser
@@ -118,10 +115,8 @@ def _check_speeds(dt, linear_speed, angular_speed):
 
 def explore_reachable(scene: Scene, laser: Laser, *, start=None, robot_radius=None, stride=1, dt=0.1,
                       linear_speed=0.5, angular_speed=1.5) -> Motion:
-    """Drive through every reachable cell (depth-first, cell centre to cell centre) and look around.
-
-    The robot first moves to the centre of its start cell. At each newly visited cell not within ``stride - 1`` cells
-    (Chebyshev) of an earlier look-around it scans all around (a full turn, or one scan for a 360 deg laser).
+    """Drive through every reachable cell (depth-first, centre to centre, from the start cell's centre) and look
+    around at each newly visited cell not within ``stride - 1`` cells (Chebyshev) of an earlier look-around.
 
     >>> from crfmap.world.scenes import enclosed_boxes
     >>> from crfmap.sim.laser import Laser
@@ -199,11 +194,10 @@ def _step(x, y, yaw, v, w, dt, free, ox, oy, c, s, res):
 
 def follow_waypoints(scene: Scene, laser: Laser, waypoints=None, *, start=None, robot_radius=None, dt=0.1,
                      linear_speed=0.5, angular_speed=1.5, scan_period=0.2, max_steps=1_000_000) -> Motion:
-    """Drive through ``waypoints`` (x, y) [m] in order, scanning every ``scan_period`` seconds.
-
-    Between waypoints the robot follows the shortest grid path (8-connected, footprint respected), shortened to
-    straight free segments. The controller sees the true pose: it turns in place towards the next point when off by
-    more than ``ALIGNED`` rad, else drives at up to ``linear_speed`` while steering (``w = heading error / dt``).
+    """Drive through ``waypoints`` (x, y) [m] in order, scanning every ``scan_period`` seconds, along the shortest grid
+    path (8-connected, footprint respected) shortened to straight free segments. The controller sees the true pose: it
+    turns in place towards the next point when off by more than ``ALIGNED`` rad, else drives at up to ``linear_speed``
+    while steering (``w = heading error / dt``).
 
     >>> from crfmap.world.scenes import office_floor
     >>> from crfmap.sim.laser import Laser
@@ -227,8 +221,7 @@ def follow_waypoints(scene: Scene, laser: Laser, waypoints=None, *, start=None, 
     can_reach = reachable(grid, start, radius)
     free = traversable(grid, radius)
     cell = pose_cell(grid, start)
-    # Targets: cell centres along straight free stretches of the grid path, then the waypoint itself
-    # (reached from its own cell's centre, so no leg cuts a corner).
+    # Targets: the simplified grid path's cell centres, then the waypoint, from its cell's centre: no leg cuts a corner
     targets = [tuple(float(v) for v in grid.cell_to_world(*cell))]
     for k, (wx, wy) in enumerate(wps[:, :2]):
         try:

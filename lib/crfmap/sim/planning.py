@@ -24,11 +24,8 @@ def segment_clear(free, x0, y0, x1, y1):
 
 @njit(cache=True)
 def coverage_tour(free, sx, sy):
-    """Depth-first tour of the cells 4-connected to (sx, sy): (m, 2) cells, each a side neighbour of the last.
-
-    Backtracking steps are included, so consecutive cells are always adjacent; every reachable cell appears, the
-    tour has at most 2 * cells - 1 entries. Neighbours are tried in the order +x, +y, -x, -y.
-    """
+    """Depth-first tour of the cells 4-connected to (sx, sy): (m, 2) cells, each a side neighbour of the last
+    (backtracking included, m < 2 * cells, no walk back after the last new cell); neighbours tried +x, +y, -x, -y."""
     h, w = free.shape
     seen = np.zeros((h, w), dtype=np.bool_)
     stack = np.empty((h * w, 3), dtype=np.int64)  # x, y, next neighbour to try

@@ -1,18 +1,16 @@
 """A robot with a laser scanner in a ground-truth grid (thesis sec. 3.1), recorded as a bag would hold it.
 
-Sensing. Each beam is ray-cast with Bresenham's line (:func:`crfmap.raycast.first_hit_kernel`, thesis Listing 1)
-from the laser's cell to the cell of the beam's end point at ``range_max``; the range of a hit is the Euclidean
-distance from the laser's position to the centre of the hit cell (so axis-aligned beams from a cell centre read
-whole cells). Hits farther than ``range_max`` are no return (``+inf``, REP 117; the thesis wrote -1,
-:data:`LEGACY_NO_RETURN`); hits nearer than ``range_min`` are ``-inf`` (too close). Outside the grid is empty space.
-Range noise is the thesis's ``d +- C``: ``d + s * c`` with ``s`` a random sign and ``c`` uniform in ``[0, C]``
-(optionally plus Gaussian noise), applied to returns only and floored at 0; a noisy value may leave ``[range_min,
-range_max]``, and readers discard it then, as REP 117 asks.
+Sensing: each beam is ray-cast with Bresenham's line (:func:`crfmap.raycast.first_hit_kernel`, thesis Listing 1) from
+the laser's cell to the cell of the beam's end point at ``range_max``; a hit reads the Euclidean distance from the
+laser to the hit cell's centre (so axis-aligned beams from a cell centre read whole cells). Beyond ``range_max`` is no
+return (``+inf``, REP 117; the thesis wrote -1, :data:`LEGACY_NO_RETURN`), nearer than ``range_min`` is ``-inf``;
+outside the grid is empty space. Range noise (:func:`add_range_noise`) may take a return out of ``[range_min,
+range_max]``; readers then discard it, as REP 117 asks.
 
 Motion: a drive (:mod:`crfmap.sim.drives`) moves the robot (:mod:`crfmap.sim.motion`). Odometry integrates what the
-wheels report: every executed translation ``d`` reads ``d +- C_lin`` and every executed turn ``a`` reads ``a +-
-C_yaw`` (the thesis's noise "at each interval of movement", Fig. 16); wheels that do not turn add no error. Odometry
-starts at (0, 0, 0) in ``odom``; ``map -> odom`` is the start pose (``recording.meta["map_to_odom"]``).
+wheels report: every executed translation ``d`` reads ``d +- C_lin``, every executed turn ``a`` reads ``a +- C_yaw``
+(the thesis's noise "at each interval of movement", Fig. 16); wheels that do not turn add no error. Odometry starts at
+(0, 0, 0) in ``odom``; ``map -> odom`` is the start pose (``recording.meta["map_to_odom"]``).
 
 >>> from crfmap.world.scenes import enclosed_boxes
 >>> rec = simulate(enclosed_boxes("train"), Laser.with_fov(360, 90), "look", progress=False)
@@ -64,10 +62,8 @@ def _cast_scans(occupied, lx, ly, lyaw, angles, reach, out):
 
 
 def cast_rays(truth: OccupancyGrid, laser: Laser, laser_poses, progress=False) -> np.ndarray:
-    """Noiseless ranges [m] of every beam from every laser pose (x [m], y [m], yaw [rad] in the grid's frame).
-
-    An (n_poses, n_beams) float64 array: ``+inf`` = nothing within ``range_max``; ``-inf`` = a hit nearer than
-    ``range_min``. ``truth`` is occupied where P > 0.5.
+    """Noiseless ranges [m] (n_poses, n_beams) of every beam from every laser pose (x [m], y [m], yaw [rad] in the
+    grid's frame); ``+inf`` / ``-inf`` as in the module doc. ``truth`` is occupied where P > 0.5.
 
     >>> from crfmap.world.scenes import enclosed_boxes
     >>> s = enclosed_boxes("train")
@@ -102,9 +98,8 @@ def cast_rays(truth: OccupancyGrid, laser: Laser, laser_poses, progress=False) -
 
 
 def add_range_noise(ranges, bound=0.0, sigma=0.0, rng=None) -> np.ndarray:
-    """The thesis's ``d +- C`` on every finite range: ``d + s * c``, ``s`` = +-1, ``c`` ~ U[0, bound], plus N(0, sigma).
-
-    Random numbers are drawn for every beam (returns or not) so the stream does not depend on the scene.
+    """The thesis's ``d +- C`` on every finite range: ``d + s * c``, ``s`` = +-1, ``c`` ~ U[0, bound], plus N(0, sigma),
+    floored at 0. Numbers are drawn for every beam (returns or not), so the stream does not depend on the scene.
 
     >>> r = add_range_noise(np.array([[1.0, np.inf]]), 0.1, rng=np.random.default_rng(0))
     >>> bool(abs(r[0, 0] - 1.0) <= 0.1), float(r[0, 1])
@@ -140,19 +135,17 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
              angular_speed=1.5, t0=START_TIME, progress=True, **misplaced) -> Recording:
     """Simulate a robot scanning ``scene``: a :class:`~crfmap.recording.Recording` (what a bag would hold).
 
-    - ``drive``: a drive of :mod:`crfmap.sim.drives` or a mode name (default: ``scene.default_mode``). Settings of a
-      drive (``stride``, ``turns``, ``waypoints``, ``scan_period``, ``robot_radius``) given here are an InputError.
-    - ``seed``: all noise comes from ``np.random.default_rng(seed)``. ``range_noise`` C [m] and ``range_sigma`` [m]:
-      see the module doc. ``odometry_noise``: C [m] or (C_lin [m], C_yaw [rad]) per step; 0 = perfect odometry.
-    - ``laser_mount``: (x, y, yaw) of the laser in base_link; ``start``: (x, y, yaw) [m, rad] or None
-      (``scene.start``).
-    - ``dt`` [s] per Twist command; ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which only turns) and
-      ``angular_speed`` [rad/s] limits. ``t0`` [s]: the stamp of the first pose (a ROS bag refuses 0).
+    ``drive``: a drive of :mod:`crfmap.sim.drives` or a mode name (default ``scene.default_mode``); a drive's settings
+    (``stride``, ``turns``, ``waypoints``, ``scan_period``, ``robot_radius``) given here are an InputError. All noise
+    comes from ``np.random.default_rng(seed)``: ``range_noise`` C [m] and ``range_sigma`` [m] (:func:`add_range_noise`),
+    ``odometry_noise`` C [m] or (C_lin [m], C_yaw [rad]) per step (0: perfect). ``laser_mount``: (x, y, yaw) in
+    base_link; ``start``: (x, y, yaw) [m, rad], None for ``scene.start``. ``dt`` [s] per Twist command; limits
+    ``linear_speed`` [m/s] (default 0.5; not for :class:`Look`, which only turns) and ``angular_speed`` [rad/s].
+    ``t0`` [s]: the first pose's stamp (a ROS bag refuses 0).
 
-    The recording holds ``scans`` (true laser poses in map), ``odometry`` (base_link in odom, noisy, twists =
-    measured), ``true_poses`` (base_link in map), ``cmd_vel`` (twists = commanded), ``laser_mount``,
-    ``ground_truth = scene.truth`` and ``meta`` (all settings, ``map_to_odom``). Identical for identical arguments.
-    """
+    Returns ``scans`` (true laser poses in map), ``odometry`` (base_link in odom, noisy, twists = measured),
+    ``true_poses`` (base_link in map), ``cmd_vel`` (twists = commanded), ``laser_mount``, ``ground_truth =
+    scene.truth`` and ``meta`` (all settings, ``map_to_odom``). Identical for identical arguments."""
     for name in misplaced:
         if name in DRIVE_SETTINGS:
             raise InputError(name, f"belongs to the drive: pass drive={DRIVE_SETTINGS[name]}({name}=...)")
@@ -178,7 +171,6 @@ def simulate(scene: Scene, laser: Laser | None = None, drive=None, *, seed=0, ra
 
     rng = np.random.default_rng(seed)
     n = len(motion)
-    # Odometry: each executed translation / turn read with the thesis's +-C.
     measured = motion.moves.copy()
     for col, bound in ((0, c_lin), (1, c_yaw)):
         sign = rng.choice(np.array([-1.0, 1.0]), size=n)

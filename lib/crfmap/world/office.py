@@ -34,16 +34,13 @@ def _split(rng, total, lo, hi, wall):
 
 
 def office_floor(width_m=20.0, height_m=15.0, resolution=0.05, seed=0, robot_radius=0.15) -> Scene:
-    """A procedurally generated office floor: rooms with doors and desks along corridors.
+    """A ``width_m`` x ``height_m`` [m] office floor (at least about 6 x 5 m), everything random from ``seed``.
 
-    Layout (y up): a vertical corridor along the left wall joins horizontal corridors; each horizontal corridor has
-    a row of rooms below and above it. Rooms are 2.5-4.5 m wide and 2.5-4.5 m deep; every room has a 0.9 m door onto
-    its corridor, some have a door to the next room, and most have a desk against the back wall. Walls are 0.15 m.
-    The robot starts where the first corridor meets the left corridor, facing +x; the waypoints visit every room
-    centre, corridor by corridor (``default_mode="waypoints"``).
-
-    ``width_m`` x ``height_m`` [m]: at least about 6 m x 5 m. Everything random comes from ``seed``; the waypoints
-    skip rooms a robot of ``robot_radius`` [m] cannot reach.
+    Layout (y up): a vertical corridor along the left wall joins horizontal corridors, each with a row of rooms below
+    and above it. Rooms are 2.5-4.5 m wide and deep; each has a 0.9 m door onto its corridor, some a door to the next
+    room, most a desk against the back wall. Walls are 0.15 m. The robot starts where the first corridor meets the
+    left one, facing +x; the waypoints visit every room centre a robot of ``robot_radius`` [m] can reach, corridor by
+    corridor (``default_mode="waypoints"``).
 
     >>> s = office_floor(12.0, 10.0, 0.1, seed=3)
     >>> s.truth.shape, len(s.waypoints) >= 2

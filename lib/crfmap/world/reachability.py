@@ -39,9 +39,8 @@ def pose_cell(grid: OccupancyGrid, pose) -> tuple:
 
 
 def footprint_offsets(robot_radius, resolution) -> np.ndarray:
-    """Offsets (dx, dy) [cells] of the cells a disc of ``robot_radius`` [m] centred in cell (0, 0) overlaps.
-
-    Overlapped: the nearest point of the cell's square is nearer than the radius. (0, 0) is always included.
+    """Offsets (dx, dy) [cells] of the cells a disc of ``robot_radius`` [m] centred in cell (0, 0) overlaps (the
+    nearest point of the cell's square is nearer than the radius), always including (0, 0).
 
     >>> footprint_offsets(0.0, 0.1).tolist()
     [[0, 0]]

@@ -1,13 +1,10 @@
 """Ground-truth scenes for the experiments of thesis sec. 4.1: the grid and where the robot starts.
 
 A scene (:class:`~crfmap.world.scene.Scene`) is a 0/1 grid, nothing unknown, plus a start pose of the robot in a
-free cell. Layouts are drawn in cell coordinates with ``x`` to the right and ``y`` up (row 0 is the lowest ``y``);
-"upper left" means small ``x``, large ``y``. The thesis scenes are :data:`THESIS_SIZE` cells square at
-:data:`THESIS_RESOLUTION` by default (``resolution=1.0``: cell units, as the thesis); its robot is a point.
-
-Scenes, by name (:data:`SCENES`, :func:`make_scene`): ``x`` (:func:`x_image`), ``occluded-train`` /
-``occluded-test`` (:func:`occluded_walls`), ``enclosed-train`` / ``enclosed-test`` and ``hollow-train`` /
-``hollow-test`` (:func:`enclosed_boxes`), ``office`` (:func:`crfmap.world.office.office_floor`).
+free cell; :data:`SCENES` names them (:func:`make_scene`). Layouts are drawn in cell coordinates with ``x`` to the
+right and ``y`` up (row 0 is the lowest ``y``); "upper left" means small ``x``, large ``y``. The thesis scenes are
+:data:`THESIS_SIZE` cells square at :data:`THESIS_RESOLUTION` by default (``resolution=1.0``: cell units, as the
+thesis); its robot is a point.
 
 >>> scene = occluded_walls("train")
 >>> scene.truth.shape, scene.truth.resolution
@@ -94,11 +91,10 @@ def _resize_nearest(img, h, w):
 
 
 def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
-    """The "X" denoising image (thesis Fig. 20) as a 0/1 grid: the X stroke is occupied (1).
-
-    Read from :data:`X_IMAGE_FILE` under the data folder (inverted, and flipped so that drawn with
-    ``origin="lower"`` the X looks as in the toolbox), resized nearest-neighbour if ``shape`` is not 32; when the file
-    is absent an X of the same proportions is drawn (``truth.meta["source"]`` says which).
+    """The "X" denoising image (thesis Fig. 20) as a 0/1 grid, the stroke occupied: :data:`X_IMAGE_FILE` under the
+    data folder (inverted, and flipped so that drawn with ``origin="lower"`` it looks as in the toolbox), resized
+    nearest-neighbour if ``shape`` is not 32; without the file an X of the same proportions is drawn
+    (``truth.meta["source"]`` says which).
 
     >>> x_image().truth.shape
     (32, 32)
@@ -143,14 +139,12 @@ def x_image(shape=32, resolution=THESIS_RESOLUTION) -> Scene:
 
 
 def noisy_image(truth, noise=0.4, seed=0, model="gaussian") -> OccupancyGrid:
-    """The thesis's "noisy scan" of a 0/1 image (sec. 4.1.1): an observed P(occupied) per cell.
+    """The thesis's "noisy scan" (sec. 4.1.1) of a 0/1 ``truth`` (OccupancyGrid, Scene or (H, W) array): an observed
+    P(occupied) per cell.
 
-    - ``"gaussian"``: ``P = clip(truth + N(0, noise**2), 0, 1)``, the noise of the UGM denoising demo (``X +
-      randn/2``) clipped to probabilities.
+    - ``"gaussian"``: ``P = clip(truth + N(0, noise**2), 0, 1)``, the UGM denoising demo's noise (``X + randn/2``).
     - ``"flip"``: each cell's 0/1 value is flipped with probability ``noise`` (at most 0.5) and the observed bit
       ``o`` reported as the posterior under a flat prior: ``P = 1 - noise`` if ``o = 1`` else ``noise``.
-
-    ``truth``: an OccupancyGrid, Scene or (H, W) array of 0/1.
 
     >>> g = noisy_image(x_image().truth, 0.4, seed=1)
     >>> bool(((g.probability >= 0) & (g.probability <= 1)).all())
@@ -193,11 +187,10 @@ _OCCLUDED_LAYOUTS = {
 
 
 def occluded_walls(variant="train", size=THESIS_SIZE, resolution=THESIS_RESOLUTION, seed=None) -> Scene:
-    """A walled room where small foreground walls hide parts of long background walls (thesis Fig. 27; "test": 32).
-
-    The thesis scanned these from the upper-left corner (``default_mode="look"``): the shadows of the small walls
-    and the gaps between far beams are what LBP must fill in. ``size``: the side [cells], the layout scaled from
-    :data:`THESIS_SIZE`; ``seed``: None for the canonical layout, or an int to jitter every wall by up to 2 cells.
+    """A walled room where small foreground walls hide parts of long background walls (thesis Fig. 27; "test": 32),
+    scanned from the upper-left corner (``default_mode="look"``): LBP must fill in the small walls' shadows and the
+    gaps between far beams. ``size`` [cells]: the layout scaled from :data:`THESIS_SIZE`; ``seed``: None for the
+    canonical layout, or an int to jitter every wall by up to 2 cells.
 
     >>> s = occluded_walls("test"); s.start_cell()
     (2, 37)
@@ -258,12 +251,10 @@ def _random_boxes(rng, size, n_boxes=8, gap=3):
 
 
 def enclosed_boxes(variant="train", hollow=False, size=THESIS_SIZE, resolution=THESIS_RESOLUTION, seed=None) -> Scene:
-    """An office-like room with boxes (cubicles) the robot cannot enter (thesis Fig. 36; "test": 37).
-
-    ``hollow=True``: only the boxes' one-cell outline is occupied; the centre is empty but enclosed, so no robot sees
-    it (Fig. 40, the case where LBP makes the grid worse). The thesis scanned every cell the robot can reach
-    (``default_mode="explore"``). ``size`` [cells]: the layout scaled from :data:`THESIS_SIZE`; ``seed``: None for
-    the canonical layout, or an int for 8 random boxes.
+    """An office-like room with boxes (cubicles) the robot cannot enter (thesis Fig. 36; "test": 37), scanned from
+    every cell the robot can reach (``default_mode="explore"``). ``hollow=True``: only the boxes' one-cell outline is
+    occupied, the enclosed centre empty and unseen (Fig. 40, where LBP makes the grid worse). ``size`` [cells]: the
+    layout scaled from :data:`THESIS_SIZE`; ``seed``: None for the canonical layout, or an int for 8 random boxes.
 
     >>> s = enclosed_boxes("train", hollow=True)
     >>> bool(s.truth.probability[7, 7] == 0.0)  # inside a hollow box
