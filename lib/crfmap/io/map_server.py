@@ -54,6 +54,7 @@ def _check_thresholds(occupied, free, source):
 
 def read_map_yaml(yaml_path) -> dict:
     """Parse and check a map_server YAML file, as nav2's ``loadMapYaml`` does; all keys but ``mode`` are required.
+
     Returns the keys (``origin`` as 3 floats, ``negate`` 0/1, ``mode`` default ``"trinary"``), plus ``image_path``
     (relative to the YAML's folder) and ``extra`` (any other keys). Stricter than nav2: ``negate`` must be
     0/1/true/false, thresholds lie in [0, 1] with free < occupied, resolution is positive."""

@@ -14,10 +14,11 @@ def is_carmen_log(path) -> bool:
 
 
 def load_recording(path, scan_topic=None, pose_source="auto", laser_mount=None, max_range=None, uses_odometry=False):
-    """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``. For a CARMEN log,
-    'auto' and 'truth' take the corrected FLASER poses and 'odom' the ODOM track interpolated at the scan stamps.
-    ``max_range`` [m]: CARMEN only (:func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller writes the
-    odometry out, so a log's corrupt ODOM records are warned of."""
+    """A Recording from a CARMEN log or a ROS1/ROS2 bag; the laser poses follow ``pose_source``.
+
+    For a CARMEN log, 'auto' and 'truth' take the corrected FLASER poses and 'odom' the ODOM track interpolated at the
+    scan stamps. ``max_range`` [m]: CARMEN only (:func:`crfmap.io.carmen.read_carmen`). ``uses_odometry``: the caller
+    writes the odometry out, so a log's corrupt ODOM records are warned of."""
     path = check_path_arg(path, "log or bag")
     if not is_carmen_log(path):
         from crfmap.io.bag_reader import read_bag

@@ -39,8 +39,9 @@ def domain_id(value=None) -> int:
 
 
 def dds_configuration(value=None) -> str | None:
-    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``), checked; None when unset or empty. A
-    comma-separated list of files (``file://`` or paths) and inline XML (``<...>``): a file that is missing or
+    """The Cyclone DDS configuration ``value`` (default: ``$CYCLONEDDS_URI``), checked; None when unset or empty.
+
+    A comma-separated list of files (``file://`` or paths) and inline XML (``<...>``): a file that is missing or
     unreadable, or text that is neither, is an InputError now, not a ``DDSException`` without reason later.
 
     >>> dds_configuration("<CycloneDDS/>")

@@ -44,6 +44,7 @@ class TfBuffer:
 
     def lookup(self, frame, stamp, fixed_frame=None):
         """(status, pose of ``frame`` in the fixed frame at ``stamp`` [s], fixed frame: ``fixed_frame`` or the root).
+
         ``status``: 'ready'; 'wait' (a moving transform has no sample at or after ``stamp`` yet, or the tree does not
         reach the fixed frame yet); 'never' (``stamp`` is before a moving transform's first sample)."""
         tree = self.tree
