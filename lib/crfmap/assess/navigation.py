@@ -5,24 +5,18 @@ unknown by the costmap's static layer. :func:`nav2_classes` composes exactly tho
 (:func:`crfmap.io.nav2_values.nav2_values`, :mod:`crfmap.io.nav2_costmap`), so a cell is lethal here when it is lethal
 in the written file; every row's P (peers' too) goes through them.
 
-:func:`nav_scores` scores that reading against the second half of a :class:`ScanSplit` (held-out occupied:
-``split.labels()``), per group of :data:`crfmap.assess.scansplit.GROUPS` (all counts: :data:`COUNTS`):
-
-- ``lethal_recall``: held-out occupied cells called lethal, over held-out occupied cells; ``lethal_precision``:
-  held-out occupied over held-out observed cells called lethal;
-- ``miss_rate`` (dangerous misses): held-out occupied cells called *free*, over held-out occupied cells;
-  ``far_miss_rate``: those farther than ``cover_radius`` from every lethal cell (a hole the costmap's inflation
-  leaves open), ``far_miss_share`` their share of the misses; ``unknown_rate``: held-out occupied cells left unknown
-  (recall + unknown rate + miss rate = 1);
-- ``ghost_rate``: cells the second half passed at least :data:`GHOST_PASSES` times and never hit, called lethal, over
-  such cells;
-- ``free_error``: held-out occupied over held-out observed cells called free (in ``unseen``: how often a
-  never-observed cell the map turned free is a wall);
-- ``face_offset``: over the held-out *face* cells (:func:`held_out_face`), the mean distance [cells] to the map's
-  nearest lethal cell, capped at :data:`FACE_CAP` (farther is a missed wall): near 0 when the lethal cells sit on the
-  observed face, about 1 for a wall one cell back;
-- ``auc`` and ``nll`` by scikit-learn (P clipped to :data:`crfmap.assess.scansplit.LOG_FLOOR`, as the scan split's
-  log-loss).
+:func:`nav_scores` scores that reading against the second half of a :class:`ScanSplit`, per group of
+:data:`crfmap.assess.scansplit.GROUPS` (all counts: :data:`COUNTS`). ``lethal_recall``, ``miss_rate`` (dangerous
+misses) and ``unknown_rate`` are the shares of the held-out occupied cells (``split.labels()``) called lethal, *free*
+and unknown (they add up to 1); ``far_miss_rate`` the share called free and farther than ``cover_radius`` from every
+lethal cell (a hole the costmap's inflation leaves open), ``far_miss_share`` their share of the misses.
+``lethal_precision`` is the share of held-out occupied cells among the held-out observed cells called lethal,
+``free_error`` among those called free (in ``unseen``: how often a never-observed cell the map turned free is a wall).
+``ghost_rate`` is the share called lethal of the cells the second half passed at least :data:`GHOST_PASSES` times
+and never hit. ``face_offset`` is the mean distance [cells] from the held-out *face* cells (:func:`held_out_face`) to
+the map's nearest lethal cell, capped at :data:`FACE_CAP` (farther is a missed wall): near 0 when the lethal cells
+sit on the observed face, about 1 for a wall one cell back. ``auc`` and ``nll`` are scikit-learn's (P clipped to
+:data:`crfmap.assess.scansplit.LOG_FLOOR`, as the scan split's log-loss).
 
 Each ratio gets an interval, and one of its paired difference to the ``reference`` row, from the resamples of
 :func:`crfmap.assess.scansplit.score` (a ratio resampled as the ratio of its block sums). Per map (``"map"``, no
