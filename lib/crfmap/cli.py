@@ -166,7 +166,7 @@ def _run(args) -> int:
 
 
 def _warning_line(prefix, w) -> str:
-    """``crfmap CMD: warning: MESSAGE`` (a category other than UserWarning is named: ``warning (DeprecationWarning)``)."""
+    """``crfmap CMD: warning: MESSAGE``, naming a category other than UserWarning (``warning (FutureWarning)``)."""
     kind = "warning" if w.category is UserWarning else f"warning ({w.category.__name__})"
     return one_line(f"{prefix}: {kind}: {w.message}", limit=1000)
 

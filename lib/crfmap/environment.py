@@ -12,12 +12,10 @@ variable               read by                          accepted
 =====================  ===============================  ===========================================
 
 ``OMP_WAIT_POLICY=PASSIVE``: OpenMP's threads otherwise spin after each parallel loop, taking a core from the threads
-crfmap's other kernels run on and from other processes on the machine.
-
-A folder variable set but empty is refused (an empty path would mean the working directory); an empty number
-variable means unset (the shell idiom ``VAR= command``), as numba reads its own. ``import crfmap`` itself changes
-nothing; :func:`prepare` checks before numba reads them. ``XDG_CACHE_HOME``, ``JPY_SESSION_NAME`` and ``MPLBACKEND``
-are only hints: a bad value falls back to the default.
+crfmap's other kernels run on and from other processes on the machine. A folder variable set but empty is refused (an
+empty path would mean the working directory); an empty number variable means unset (the shell idiom
+``VAR= command``), as numba reads its own. ``XDG_CACHE_HOME``, ``JPY_SESSION_NAME`` and ``MPLBACKEND`` are only
+hints: a bad value falls back to the default.
 """
 from __future__ import annotations
 
@@ -148,14 +146,10 @@ def numba_cache_dir() -> Path | None:
     return writable_folder(Path(text).expanduser(), "NUMBA_CACHE_DIR")
 
 
-
-
 def number(variable, what) -> int | None:
     """``$variable`` as a whole number >= 1, or None when it is unset or empty."""
     text = os.environ.get(variable, "")
     return whole_number(variable, text, what) if text.strip() else None
-
-
 
 
 def check(numba_cache_too=True) -> None:
@@ -173,12 +167,10 @@ def check(numba_cache_too=True) -> None:
 
 
 def prepare(numba_cache_too=True) -> None:
-    """Ready this process for crfmap's kernels; the entry points call it first, a library user may.
-
-    Checks every variable (:func:`check`) before numba reads ``NUMBA_NUM_THREADS`` once at its import (and then fails
-    with a traceback on ``0``, or ignores ``abc``), so the error is crfmap's one line naming the variable; sets
-    ``OMP_WAIT_POLICY``; and :func:`prepare_cache`, unless ``numba_cache_too`` is False (the ``crfmap`` command calls
-    it after reading its command line, so that ``--help`` works for a user who cannot write the venv's cache).
+    """Ready this process for crfmap's kernels (the entry points call it first; a library user may): :func:`check`
+    the variables before numba reads ``NUMBA_NUM_THREADS`` once at its import (then failing with a traceback on ``0``,
+    or ignoring ``abc``), so the error is crfmap's one line; set ``OMP_WAIT_POLICY``; and :func:`prepare_cache` unless
+    ``numba_cache_too`` is False (the ``crfmap`` command calls it after parsing, so ``--help`` needs no writable cache).
     """
     check(numba_cache_too=False)
     quiet_openmp_threads()

@@ -83,7 +83,6 @@ class OccupancyGrid:
                                        "mistake or a corrupt field?")
         self.origin = origin
 
-    # --- shape -----------------------------------------------------------------
     @property
     def height(self) -> int:
         return int(self.probability.shape[0])
@@ -103,7 +102,6 @@ class OccupancyGrid:
     def copy(self) -> "OccupancyGrid":
         return self.with_probability(self.probability.copy())
 
-    # --- world <-> cell ------------------------------------------------------------
     def world_to_cell(self, x, y):
         """Cell indices (ix, iy) (floats, floor them for the cell) of world points."""
         ox, oy, yaw = self.origin
@@ -136,7 +134,6 @@ class OccupancyGrid:
         x, y = ox + c * u - s * v, oy + s * u + c * v
         return (float(x.min()), float(y.min()), float(x.max()), float(y.max()))
 
-    # --- nav_msgs/OccupancyGrid values -------------------------------------------
     def to_int8(self) -> np.ndarray:
         """nav_msgs/OccupancyGrid data as a [y, x] int8 array: -1 unknown (P exactly 0.5), else 0..100."""
         p = self.probability
@@ -162,7 +159,7 @@ class OccupancyGrid:
 
 
 def as_grid(grid, name="grid") -> OccupancyGrid:
-    """``grid`` itself if it is an :class:`OccupancyGrid`, else a checked array of P(occupied) as one (default metadata).
+    """``grid`` if it is an :class:`OccupancyGrid`, else a checked array of P(occupied) as one (default metadata).
 
     >>> as_grid([[0.5, 1.0]]).shape
     (1, 2)

@@ -10,8 +10,7 @@ import lazy_loader
 
 
 def attach(package: str, api: dict) -> tuple:
-    """:func:`lazy_loader.attach` of ``package`` exposing ``api`` ({name: submodule}): (``__getattr__``, ``__dir__``,
-    ``__all__``).
+    """(``__getattr__``, ``__dir__``, ``__all__``) of ``package`` exposing ``api`` ({name: submodule}), by lazy_loader.
 
     >>> getattr_, dir_, all_ = attach("crfmap.crf", {"infer": "inference.lbp"})
     >>> getattr_("infer").__name__, all_

@@ -23,9 +23,7 @@ def _step(x, y, err, dx, dy, sx, sy):
 @njit(cache=True, nogil=True)
 def bresenham_step(x0, y0, x1, y1, out):
     """Write the cells of the line (x0, y0) -> (x1, y1) into ``out[:, 0:2]`` (at least max(|x1 - x0|, |y1 - y0|) + 1
-    rows) as (x, y); return the count. At a tie (thesis Fig. 15) the minor coordinate stays nearer the start, as in
-    Listing 1.
-    """
+    rows) as (x, y), return the count. Ties (thesis Fig. 15) keep the minor coordinate nearer the start (Listing 1)."""
     dx = abs(x1 - x0)
     dy = abs(y1 - y0)
     sx = 1 if x1 > x0 else -1

@@ -1,5 +1,4 @@
-"""How good a grid is, and learning the potentials that make it better: metrics, scan-split validation, baselines
-and peers as rows, navigation and localisation, learning.
+"""How good a grid is, and learning the potentials that make it better.
 
 Public API (imported on first use, so ``import crfmap.assess`` stays cheap):
 """

@@ -87,17 +87,14 @@ def _logodds(split, raw, thesis_max_iter):
 
 
 def _thesis(split, raw, thesis_max_iter):
-    """LBP with the thesis's tables on the raw grid."""
     return get_preset("thesis").refine(raw, max_iter=thesis_max_iter).beliefs.probability
 
 
 def _graphcut(split, raw, thesis_max_iter):
-    """The MAP labelling of the thesis's CRF."""
     return graph_cut(raw, get_preset("thesis").hidden)
 
 
-# The registry of baseline rows: name -> function(split, raw grid, thesis_max_iter) -> [y, x] P (None: not available
-# for this split); a new baseline is one function and one entry.
+# name -> function(split, raw grid, thesis_max_iter) -> [y, x] P, or None for this split; a new baseline is one entry
 BASELINE_ROWS = {
     "raw": lambda split, raw, _: raw,
     "logodds": _logodds,
@@ -111,10 +108,8 @@ BASELINES = tuple(BASELINE_ROWS)
 
 
 def all_baselines(split, thesis_max_iter: int = 1000, names=BASELINES) -> dict:
-    """{name: P} of the baselines ``names`` (:data:`BASELINE_ROWS`) for a scan split's first half; ``raw`` always.
-
-    ``logodds`` needs ``split.first_scans`` and is left out without them.
-    """
+    """{name: P} of the baselines ``names`` (:data:`BASELINE_ROWS`) for a scan split's first half: ``raw`` always,
+    ``logodds`` only with ``split.first_scans``."""
     unknown = [n for n in names if n not in BASELINE_ROWS]
     if unknown:
         raise InputError("baselines", f"unknown baseline(s) {', '.join(unknown)}; known: {', '.join(BASELINES)}")

@@ -1,11 +1,9 @@
 """Is a map's P(occupied) a probability? Reliability diagrams, expected calibration error, a temperature.
 
-On a scan split (:mod:`crfmap.assess.scansplit`) the cells the second half observed are cut by
-their predicted P into ``bins`` equal-width bins on [0, 1]; in each bin the mean P is set against
-the share of cells the second half calls occupied. A calibrated map has the two equal in every bin.
-The expected calibration error is the cell-weighted mean gap, ``sum_b n_b / n |mean P_b - share_b|``.
-
-:func:`fit_temperature` fits a preset's temperature T by the log-loss on a recording's second half: fit it on the
+On a scan split (:mod:`crfmap.assess.scansplit`) the cells the second half observed are cut by their predicted P into
+``bins`` equal-width bins on [0, 1]; in each bin the mean P is set against the share of cells the second half calls
+occupied. A calibrated map has the two equal in every bin; :func:`expected_calibration_error` is the cell-weighted mean
+gap. :func:`fit_temperature` fits a preset's temperature T by the log-loss on a recording's second half: fit it on the
 training recording only, then apply it unchanged elsewhere.
 
 >>> p = np.array([0.1, 0.1, 0.9, 0.9]); y = np.array([0, 1, 1, 1])

@@ -104,7 +104,7 @@ def compare(split: ScanSplit, preset: str = DEFAULT_PRESET, n_boot: int = 200, b
 
 
 def table_rows(scores: dict, group: str = "all", metrics=("brier", "logloss", "auc", "wall_recall")) -> list:
-    """Rows ``[name, metric, "lo-hi", ...]`` of a :func:`crfmap.assess.scansplit.score` result for one group (for a table)."""
+    """Rows ``[name, metric, "lo-hi", ...]`` of a :func:`crfmap.assess.scansplit.score` result for one group."""
     rows = []
     for name, groups in scores.items():
         if name.startswith("_"):

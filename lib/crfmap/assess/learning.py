@@ -1,18 +1,17 @@
 """Learning the CRF's two tables from a grid with known ground truth (thesis sec. 2.7, 3.5).
 
-Three learners, each returning the learned tables and its trace:
+Three learners, each returning a :class:`LearningResult`:
 
-- :func:`learn_thesis`: the thesis's method exactly, a coordinate search on the 8 entries (4 hidden, 4 link)
-  minimising LBP's MSE against the truth.
-- :func:`learn_gradient` (our default): the same objective by gradient descent on the log of the 8 entries
-  (entries stay positive, and a step is relative to the entry's size, which the thesis's fixed alpha = 0.01 is not:
-  0.1 % of a hidden entry of 10 but 100 % of a link entry of 0.01); central differences through converged LBP.
-- :func:`learn_pseudolikelihood`: maximise the pseudo-likelihood of the ground truth (Besag), the learner of the
-  Matlab toolbox the thesis compared against. Each cell's conditional given its true neighbours and its observation
-  is exact and cheap, so no inference runs during learning, and the gradient is exact.
+- :func:`learn_thesis`: the thesis's method exactly, a coordinate search on the 8 entries (4 hidden, 4 link).
+- :func:`learn_gradient` (our default): the same objective, LBP's MSE against the truth, by gradient descent on the
+  log of the entries: they stay positive, and a step is relative to the entry's size, which the thesis's fixed
+  alpha = 0.01 is not (0.1 % of a hidden entry of 10 but 100 % of a link entry of 0.01).
+- :func:`learn_pseudolikelihood`: the pseudo-likelihood of the truth (Besag), the learner of the Matlab toolbox the
+  thesis compared against. Each cell's conditional given its true neighbours and its observation is exact and cheap,
+  so no inference runs during learning and the gradient is exact.
 
-A table matters only up to scale for LBP, so learned tables are reported rescaled to the scales of the thesis's
-defaults (:func:`rescale`); the thesis's learner keeps them by construction.
+A table matters only up to scale for LBP, so learned tables are reported at the scales of the thesis's defaults
+(:func:`rescale`).
 """
 from __future__ import annotations
 
@@ -32,9 +31,8 @@ ENTRY_NAMES = ("hidden oo", "hidden oe", "hidden eo", "hidden ee", "link oo", "l
 
 
 def check_pair(observed, truth, grids_only=False) -> tuple:
-    """The probability arrays of an observed grid and its truth, checked to have one shape.
-
-    Each may be an :class:`~crfmap.grid.OccupancyGrid` or (unless ``grids_only``) an array of probabilities.
+    """The probability arrays of an observed grid and its truth (each an OccupancyGrid or, unless ``grids_only``, an
+    array of P), checked to have one shape.
 
     >>> obs, tru = check_pair(OccupancyGrid(np.full((2, 2), 0.5)), np.zeros((2, 2)))
     >>> check_pair(obs, np.zeros((3, 2)))
@@ -128,10 +126,9 @@ def learn_thesis(
 
     Each entry in turn is stepped by +alpha, else -alpha, keeping a step that lowers the MSE; when a round over the 8
     improves nothing, alpha halves; the search stops when alpha falls below ``min_alpha`` (by default at the first
-    round without gain) or after ``max_rounds``.
-    ``observed``, ``truth``: grids (OccupancyGrid or [y, x] arrays), truth 0/1; ``hidden``, ``link``: the starting
-    tables; ``lbp_options``: for :func:`crfmap.crf.inference.lbp.infer` (the thesis's: ``{"schedule": "thesis",
-    "max_iter": 2}``).
+    round without gain) or after ``max_rounds``. ``observed``, ``truth``: grids (OccupancyGrid or [y, x] arrays),
+    truth 0/1; ``hidden``, ``link``: the starting tables; ``lbp_options``: for :func:`crfmap.crf.inference.lbp.infer`
+    (the thesis's: ``{"schedule": "thesis", "max_iter": 2}``).
 
     >>> rng = np.random.default_rng(0)
     >>> truth = (rng.uniform(size=(8, 8)) < 0.3).astype(float)
@@ -194,7 +191,6 @@ def _log_entries(hidden, link, floor):
 
 
 def _tables(theta):
-    """(hidden, link) from the 8 log-entries."""
     e = np.exp(theta)
     return e[:4].reshape(2, 2), e[4:].reshape(2, 2)
 
@@ -213,11 +209,12 @@ def learn_gradient(
     lbp_options: dict | None = None,
     progress: bool = True,
 ) -> LearningResult:
-    """Minimise LBP's MSE against the truth by gradient descent on the log-entries.
+    """Minimise LBP's MSE against the truth by gradient descent on the log-entries (central differences of width
+    ``delta`` through converged LBP).
 
-    Zero entries are lifted to ``floor`` times their table's largest entry. Each step moves ``step_size`` (log
-    units) along the normalised gradient; a step that lowers the MSE is kept and the size grows by 1.5, else it
-    halves; the search stops when the size falls below ``min_step`` or after ``steps`` steps.
+    Zero entries are lifted to ``floor`` times their table's largest entry. Each step moves ``step_size`` (log units)
+    along the normalised gradient; a step that lowers the MSE is kept and the size grows by 1.5, else it halves; the
+    search stops when the size falls below ``min_step`` or after ``steps`` steps.
     """
     obs, tru = check_pair(observed, truth)
     H0, L0 = check_table(hidden, "hidden"), check_table(link, "link")
@@ -266,10 +263,6 @@ def learn_gradient(
         return LearningResult(H, L, before, before, trace, "gradient")
     H, L = rescale(*_tables(theta))
     return LearningResult(H, L, before, best, trace, "gradient")
-
-
-# ---------------------------------------------------------------------------------------------
-# pseudo-likelihood
 
 
 def _neighbour_counts(truth_occupied):
@@ -358,11 +351,9 @@ def learn_pseudolikelihood(
     lbp_options: dict | None = None,
     progress: bool = True,
 ) -> LearningResult:
-    """Maximise the pseudo-likelihood of the truth by gradient ascent on the log-entries (Adam).
-
-    Zero entries are lifted as in :func:`learn_gradient`. ``mse_before``/``mse_after``: LBP's MSE with the starting
-    and learned tables under ``lbp_options``, for comparison with the other learners.
-    """
+    """Maximise the pseudo-likelihood of the truth by gradient ascent on the log-entries (Adam); zero entries are
+    lifted as in :func:`learn_gradient`. ``mse_before``/``mse_after``: LBP's MSE with the starting and learned tables
+    under ``lbp_options``, to compare with the other learners."""
     obs, tru = check_pair(observed, truth)
     check_int("steps", steps, low=1)
     learning_rate = check_number("learning_rate", learning_rate, low=0.0, low_open=True)

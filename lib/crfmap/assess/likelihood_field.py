@@ -1,41 +1,40 @@
 """nav2_amcl's likelihood-field laser model, exactly as nav2 computes it: how well a scan fits a map at a pose.
 
-The scoring of maps by it is :mod:`crfmap.assess.localisation`. The model, as read from ros-navigation/navigation2 (main at commit a3a97043ee93, 2026-08-21):
+Maps are scored with it in :mod:`crfmap.assess.localisation`. The model, as read from ros-navigation/navigation2
+(main at commit a3a97043ee93, 2026-08-21):
 
-- ``nav2_amcl/src/amcl_node.cpp``, ``convertMap`` (lines 1348-1373): an OccupancyGrid value of exactly 100
-  is an obstacle (``occ_state = +1``), 0 is free, anything else unknown. The map nav2 loads from a file
-  crfmap writes (:func:`nav2_lethal`): ``OccupancyGrid.to_int8`` rounds P to percent, map_saver's trinary
-  rule writes values >= round(100 * 0.65) black, and nav2_map_server reads black back as 100 (checked
-  against :func:`crfmap.io.map_server.save_map` / ``load_map`` in the tests). Free and unknown cells
-  play no part in this model. ``convertMap`` keeps the map's origin position and ignores its yaw.
+- ``nav2_amcl/src/amcl_node.cpp``, ``convertMap`` (lines 1348-1373): an OccupancyGrid value of exactly 100 is an
+  obstacle (``occ_state = +1``), 0 is free, anything else unknown; free and unknown cells play no part in this model.
+  In the map nav2 loads from a file crfmap writes (:func:`nav2_lethal`), ``OccupancyGrid.to_int8`` rounds P to
+  percent, map_saver's trinary rule writes values >= round(100 * 0.65) black, and nav2_map_server reads black back as
+  100 (checked against :func:`crfmap.io.map_server.save_map` / ``load_map`` in the tests). ``convertMap`` keeps the
+  map's origin position and ignores its yaw.
 - ``nav2_amcl/src/map/map_cspace.cpp``, ``map_update_cspace`` (lines 148-210) with ``CachedDistanceMap`` and
   ``enqueue`` (lines 49-141): ``occ_dist`` [m] is meant as each cell's Euclidean distance to the nearest obstacle
   cell, kept while the distance in cells is <= ``int(max_occ_dist / resolution)``, else ``max_occ_dist``; stored as
-  float. :func:`distance_field` computes exactly that with ``scipy.ndimage.distance_transform_edt`` and the same
-  cut. nav2's own brushfire (a cell takes the distance to the obstacle its first-popped neighbour came from) is at
-  times above the exact distance, never below (``nav2_brushfire`` in the tests ports it line by line).
-- ``nav2_amcl/include/nav2_amcl/map/map.hpp`` (lines 121-133) with ``convertMap``: a point (x, y) falls in
-  cell ``floor((x - origin_x') / res + 0.5) + size_x / 2`` where ``origin_x' = origin_x + (size_x / 2) * res``
-  (integer halves), i.e. AMCL *rounds* to the nearest cell corner index: it reads cell i as centred on
-  ``origin_x + i * res``, half a cell below where the OccupancyGrid convention (and crfmap) puts it. This
-  module does the same, so a perfect map's best pose sits about (res/2, res/2) from the true one. Pass ``origin``
-  shifted by ``+res/2`` in x and y to measure without that shift.
+  float. :func:`distance_field` computes exactly that. nav2's own brushfire (a cell takes the distance to the
+  obstacle its first-popped neighbour came from) is at times above the exact distance, never below
+  (``nav2_brushfire`` in the tests ports it line by line).
+- ``nav2_amcl/include/nav2_amcl/map/map.hpp`` (lines 121-133) with ``convertMap``: a point (x, y) falls in cell
+  ``floor((x - origin_x') / res + 0.5) + size_x / 2`` where ``origin_x' = origin_x + (size_x / 2) * res`` (integer
+  halves): AMCL *rounds* to the nearest cell corner index, reading cell i as centred on ``origin_x + i * res``, half a
+  cell below where the OccupancyGrid convention (and crfmap) puts it. This module does the same, so a perfect map's
+  best pose sits about (res/2, res/2) from the true one; pass ``origin`` shifted by ``+res/2`` in x and y to measure
+  without that shift.
 - ``nav2_amcl/src/sensors/laser/likelihood_field_model.cpp``, ``sensorFunction`` (lines 49-140): beams ``0, step, 2
   step, ...`` with ``step = max(1, (range_count - 1) // (max_beams - 1))`` (lines 68-73); a beam is skipped if its
-  range is ``>= range_max`` (max-range readings, line 92) or NaN (line 97); its end point at the laser pose plus
-  range along ``yaw + bearing`` (lines 104-105); ``z`` = that cell's ``occ_dist``, or ``max_occ_dist`` off the map
-  (lines 114-118); ``pz = z_hit exp(-z^2 / (2 sigma_hit^2)) + z_rand / range_max`` (lines 121-123, no Gaussian
-  normalisation), and the scan's weight is ``p = 1 + sum pz^3`` (line 132; not a product of pz).
-  :func:`LikelihoodField.log_weights` returns ``log p``.
+  range is ``>= range_max`` (line 92) or NaN (line 97); its end point at the laser pose plus range along ``yaw +
+  bearing`` (lines 104-105); ``z`` = that cell's ``occ_dist``, or ``max_occ_dist`` off the map (lines 114-118); ``pz
+  = z_hit exp(-z^2 / (2 sigma_hit^2)) + z_rand / range_max`` (lines 121-123, no Gaussian normalisation); the scan's
+  weight is ``p = 1 + sum pz^3`` (line 132; not a product of pz), and :func:`LikelihoodField.log_weights` returns
+  ``log p``.
 - ``nav2_amcl/src/amcl_node.cpp``, ``updateFilter`` (lines 717-743): ``range_max = min(scan range_max,
   laser_max_range)`` when ``laser_max_range > 0``; readings ``<= range_min`` (``max(scan range_min,
-  laser_min_range)`` when ``laser_min_range > 0``) become ``range_max`` and so are skipped. With REP 117
-  ranges (+inf no return, -inf too close, NaN invalid) the beams used are the finite ones strictly
-  between range_min and range_max. ``LikelihoodFieldModel::sensorUpdate`` updates nothing when
-  ``max_beams < 2`` (likelihood_field_model.cpp line 146), so :class:`LaserModel` refuses it.
-- Parameter defaults (amcl_node.cpp lines 955-987): ``z_hit`` 0.5, ``z_rand`` 0.5, ``sigma_hit`` 0.2 m,
-  ``laser_likelihood_max_dist`` 2.0 m, ``max_beams`` 60, ``laser_max_range`` 100 m,
-  ``laser_min_range`` -1 (off): :class:`LaserModel`'s defaults.
+  laser_min_range)`` when ``laser_min_range > 0``) become ``range_max`` and so are skipped. With REP 117 ranges (+inf
+  no return, -inf too close, NaN invalid) the beams used are the finite ones strictly between range_min and range_max.
+  ``LikelihoodFieldModel::sensorUpdate`` updates nothing when ``max_beams < 2`` (likelihood_field_model.cpp line
+  146), so :class:`LaserModel` refuses it.
+- Parameter defaults (amcl_node.cpp lines 955-987) are :class:`LaserModel`'s.
 
 >>> p = np.zeros((40, 40)); p[:, 30] = 1.0                  # a wall at x = 1.5 m (5 cm cells)
 >>> scans = ScanSet(np.full((1, 3), 1.0, np.float32), -0.1, 0.1, 0.0, 10.0,
@@ -98,10 +97,8 @@ def nav2_lethal(probability) -> np.ndarray:
 
 
 def distance_field(lethal, resolution, max_dist=LaserModel.laser_likelihood_max_dist) -> np.ndarray:
-    """nav2_amcl's ``occ_dist`` [m] (float32, [y, x]): distance to the nearest ``lethal`` cell, cut at ``max_dist``.
-
-    A cell farther than ``int(max_dist / resolution)`` cells (C's truncation) from every lethal cell gets
-    ``max_dist``; so does every cell of a map without lethal cells.
+    """nav2_amcl's ``occ_dist`` [m] (float32, [y, x]): distance to the nearest ``lethal`` cell, ``max_dist`` beyond
+    ``int(max_dist / resolution)`` cells (C's truncation) and everywhere in a map without lethal cells.
 
     >>> distance_field(np.array([[True, False, False, False]]), 0.5, max_dist=1.2).tolist()
     [[0.0, 0.5, 1.0, 1.2000000476837158]]
@@ -175,10 +172,8 @@ def beam_indices(n_beams, max_beams=LaserModel.max_beams) -> np.ndarray:
 
 @dataclass
 class LikelihoodField:
-    """A map as nav2_amcl's likelihood-field model sees it: ``occ_dist`` [y, x] and where it lies.
-
-    ``origin``: cell (0, 0)'s corner, as an OccupancyGrid's; cells are looked up as AMCL does (see the module doc).
-    """
+    """A map as nav2_amcl's likelihood-field model sees it: ``occ_dist`` [y, x] and ``origin``, cell (0, 0)'s corner
+    as an OccupancyGrid's (cells are looked up as AMCL does: see the module doc)."""
 
     occ_dist: np.ndarray  # (height, width) float32 [m]
     resolution: float  # [m / cell]
@@ -195,10 +190,8 @@ class LikelihoodField:
         return cls(occ_dist, resolution, origin, model)
 
     def log_weights(self, beams: Beams, poses) -> np.ndarray:
-        """``log p`` of scan i at each laser pose ``poses[i, k]`` (x, y, yaw in the map frame): (n, k).
-
-        ``p = 1 + sum over used beams of pz^3`` is the factor AMCL multiplies a particle's weight by.
-        """
+        """``log p`` (n, k) of scan i at each laser pose ``poses[i, k]`` (x, y, yaw in the map frame); ``p = 1 + sum
+        over used beams of pz^3`` is the factor AMCL multiplies a particle's weight by."""
         poses = np.asarray(poses, dtype=np.float64)
         if poses.ndim != 3 or poses.shape[0] != len(beams) or poses.shape[2] != 3 or not np.isfinite(poses).all():
             raise InputError("poses", f"expected finite (n_scans={len(beams)}, k, 3) x, y, yaw, got {poses.shape}")

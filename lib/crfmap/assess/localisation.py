@@ -1,18 +1,12 @@
 """Localisation on a map: nav2_amcl's likelihood-field laser model, scored on held-out scans.
 
-A map is good for a robot if the robot can find itself on it. nav2 localises with AMCL, whose default laser model
-scores a scan at a pose by how far each beam's end point lands from the nearest obstacle of the map
-(:mod:`crfmap.assess.likelihood_field`). Two questions of each held-out scan (the map was *not* built from it):
-
-- discrimination: does the scan score higher at its corrected (true) laser pose than at poses offset by
-  5-30 cm and 2-10 degrees (:func:`pose_offsets`)? Reported as the share of offsets the true pose beats
-  (ties count one half) and the mean log-weight margin, true minus offset;
-- pose search: started from a perturbed pose (up to 30 cm and 10 degrees off), does a coarse-to-fine
-  grid search that maximises the same weight (:func:`search_poses`) come back? Reported as the median
-  translation [m] and rotation [deg] error and the share of scans found within 10 cm and 3 degrees.
-
-:func:`compare_localisation` scores several maps on the same scans, offsets and starting poses, and gives
-each metric's paired difference to a reference map (the raw grid) with a bootstrap interval over scans.
+A map is good for a robot if the robot can find itself on it. nav2 localises with AMCL, whose default laser model scores
+a scan at a pose by how far each beam's end point lands from the map's nearest obstacle
+(:mod:`crfmap.assess.likelihood_field`). Each held-out scan (the map was *not* built from it) asks two questions
+(:data:`METRICS`): does it score higher at its corrected (true) laser pose than at nearby offset poses
+(:func:`pose_offsets`)? And does a search maximising the same weight (:func:`search_poses`), started off the true pose
+(:func:`start_poses`), come back to it? :func:`compare_localisation` scores several maps on the same scans, offsets and
+starting poses, with each metric's paired difference to a reference map (the raw grid) and a bootstrap interval.
 """
 from __future__ import annotations
 import math
@@ -33,7 +27,7 @@ FOUND_TRANSLATION = 0.10  # [m] a search ending within this distance ...
 FOUND_ROTATION_DEG = 3.0  # [deg] ... and this turn of the true pose found it
 DEFAULT_MODEL = LaserModel()  # nav2_amcl's defaults
 METRICS = {  # name: higher is better
-    "beats_offsets": True,  # mean over scans of the share of offset poses the true pose beats
+    "beats_offsets": True,  # mean over scans of the share of offset poses the true pose beats (ties count one half)
     "log_margin": True,  # mean over scans of log p(true) - log p(offset), averaged over the offsets
     "translation_error": False,  # median over scans [m] after the pose search
     "rotation_error": False,  # median over scans [deg] after the pose search

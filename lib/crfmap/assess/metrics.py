@@ -1,9 +1,8 @@
 """How good a grid is against ground truth (thesis sec. 2.10, with its eq. 12/13 swap fixed).
 
 - MSE over all cells (eq. 11).
-- Precision = TP / (TP + FP), recall = TP / (TP + FN), accuracy = (TP + TN) / all, positive class
-  = occupied, a cell predicted occupied if P > 0.5, counted only over cells whose prediction is
-  not exactly 0.5 (unknown). (The thesis's eq. 12 and 13 swap precision and recall.)
+- Precision = TP / (TP + FP), recall = TP / (TP + FN), accuracy = (TP + TN) / all, positive class = occupied, a cell
+  predicted occupied if P > 0.5, counted only over cells whose prediction is not exactly 0.5 (unknown).
 - ROC by sweeping the threshold over every distinct predicted value; AUC by the trapezoid rule
   (:func:`sklearn.metrics.roc_curve` keeping every point, :func:`sklearn.metrics.auc`).
 """
@@ -89,10 +88,9 @@ def confusion(pred, truth, mask=None, threshold=0.5) -> Confusion:
 
 
 def roc_curve(pred, truth, mask=None, include_unknown=True):
-    """ROC curve: (false positive rate, true positive rate, thresholds), from (0, 0) to (1, 1).
-
-    A cell counts as predicted occupied when P >= threshold, for every distinct predicted P, high to low. Unknown
-    cells (P = 0.5) are included by default, since ranking them is part of the classifier.
+    """ROC curve (false positive rate, true positive rate, thresholds) from (0, 0) to (1, 1): predicted occupied when
+    P >= threshold, for every distinct P, high to low. Unknown cells (P = 0.5) are included by default, since ranking
+    them is part of the classifier.
 
     >>> fpr, tpr, _ = roc_curve([[0.9, 0.8, 0.3, 0.1]], [[1, 0, 1, 0]])
     >>> fpr.tolist(), tpr.tolist()

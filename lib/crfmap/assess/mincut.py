@@ -20,8 +20,7 @@ def floored_unary(observed, link=DEFAULT_LINK):
 def potts_weight(hidden=DEFAULT_HIDDEN) -> tuple:
     """(w, shift, constant) so that -log hidden[s_a, s_b] = constant + shift * (x_a + x_b) + w [x_a != x_b].
 
-    x = 1 for occupied. Needs a symmetric table with positive entries; w >= 0 (attractive) makes
-    the energy submodular, so a graph cut finds the exact minimum.
+    x = 1 for occupied. Needs a symmetric table with positive entries and w >= 0 (attractive: see the module doc).
 
     >>> [round(v, 4) for v in potts_weight([[10, 1], [1, 10]])]  # log 10, 0, -log 10
     [2.3026, 0.0, -2.3026]
@@ -37,10 +36,8 @@ def potts_weight(hidden=DEFAULT_HIDDEN) -> tuple:
 
 
 def graph_cut_map(observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK) -> tuple:
-    """Exact MAP labelling with PyMaxflow: (occupied[y, x] bool, energy from the flow).
-
-    Sink side = occupied: a cell on the sink side pays its source capacity (its occupied cost).
-    """
+    """Exact MAP labelling with PyMaxflow: (occupied[y, x] bool, energy from the flow). Sink side = occupied: a cell
+    on the sink side pays its source capacity (its occupied cost)."""
     import maxflow
 
     u = floored_unary(observed, link)

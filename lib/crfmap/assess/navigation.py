@@ -1,36 +1,28 @@
 """What a navigation stack does with a map: nav2's reading of it, scored on a scan split.
 
-nav2 does not read P(occupied): it reads the trinary map ``crfmap infer`` writes, loaded by map_server and made
-lethal / free / unknown by the costmap's static layer. :func:`nav2_classes` composes exactly those rules
-(:func:`crfmap.io.nav2_values.nav2_values`, :mod:`crfmap.io.nav2_costmap`), so a cell is lethal here when it is
-lethal in the written file; every row's P (peers' too) goes through them.
+nav2 reads not P(occupied) but the trinary map ``crfmap infer`` writes, loaded by map_server and made lethal / free /
+unknown by the costmap's static layer. :func:`nav2_classes` composes exactly those rules
+(:func:`crfmap.io.nav2_values.nav2_values`, :mod:`crfmap.io.nav2_costmap`), so a cell is lethal here when it is lethal
+in the written file; every row's P (peers' too) goes through them.
 
-:func:`nav_scores` scores that reading against the second half of a :class:`ScanSplit` (held-out occupied:
-``split.labels()``), per group of cells of :data:`crfmap.assess.scansplit.GROUPS`:
-
-- ``lethal_recall``: held-out occupied cells called lethal, over held-out occupied cells; ``lethal_precision``:
-  held-out occupied cells among the held-out observed cells called lethal;
-- ``miss_rate`` (dangerous misses): held-out occupied cells called *free*, over held-out occupied cells;
-  ``far_miss_rate``: those farther than ``cover_radius`` from every lethal cell (a hole the costmap's inflation
-  leaves open), ``far_miss_share`` their share of the misses; ``unknown_rate``: held-out occupied cells left unknown
-  (recall + unknown rate + miss rate = 1);
-- ``ghost_rate``: cells the second half passed at least :data:`GHOST_PASSES` times and never hit, called lethal, over
-  such cells;
-- ``free_error``: held-out occupied cells among the held-out observed cells called free (in ``unseen``: how often a
-  never-observed cell the map turned free is a wall);
-- ``face_offset``: over the held-out *face* cells (held-out occupied cells beside a held-out free cell), the mean
-  distance [cells] to the map's nearest lethal cell, capped at :data:`FACE_CAP` (farther is a missed wall): near 0
-  when the lethal cells sit on the observed face, about 1 for a wall one cell back;
-- ``auc`` and ``nll`` by scikit-learn (P clipped to :data:`crfmap.assess.scansplit.LOG_FLOOR`: the scan split's
-  log-loss);
-- counts: ``occupied``, ``lethal``, ``misses``, ``far_misses``, ``ghost_candidates``, ``ghosts``, ``free``,
-  ``face_cells`` (and ``face_offset_cells``, the sum of their capped distances).
+:func:`nav_scores` scores that reading against the second half of a :class:`ScanSplit`, per group of
+:data:`crfmap.assess.scansplit.GROUPS` (all counts: :data:`COUNTS`). ``lethal_recall``, ``miss_rate`` (dangerous
+misses) and ``unknown_rate`` are the shares of the held-out occupied cells (``split.labels()``) called lethal, *free*
+and unknown (they add up to 1); ``far_miss_rate`` the share called free and farther than ``cover_radius`` from every
+lethal cell (a hole the costmap's inflation leaves open), ``far_miss_share`` their share of the misses.
+``lethal_precision`` is the share of held-out occupied cells among the held-out observed cells called lethal,
+``free_error`` among those called free (in ``unseen``: how often a never-observed cell the map turned free is a wall).
+``ghost_rate`` is the share called lethal of the cells the second half passed at least :data:`GHOST_PASSES` times
+and never hit. ``face_offset`` is the mean distance [cells] from the held-out *face* cells (:func:`held_out_face`) to
+the map's nearest lethal cell, capped at :data:`FACE_CAP` (farther is a missed wall): near 0 when the lethal cells
+sit on the observed face, about 1 for a wall one cell back. ``auc`` and ``nll`` are scikit-learn's (P clipped to
+:data:`crfmap.assess.scansplit.LOG_FLOOR`, as the scan split's log-loss).
 
 Each ratio gets an interval, and one of its paired difference to the ``reference`` row, from the resamples of
 :func:`crfmap.assess.scansplit.score` (a ratio resampled as the ratio of its block sums). Per map (``"map"``, no
 interval): ``unknown_free``, the cells the first half never observed that the map calls free
-(``unknown_free_observed`` of them the second half observed, ``unknown_free_occupied`` of those occupied), and the
-wall shape of :func:`wall_shape`.
+(``unknown_free_observed`` of them the second half observed, ``unknown_free_occupied`` of those occupied), and
+:func:`wall_shape`.
 
 >>> from crfmap.assess.scansplit import ScanSplit
 >>> sp = ScanSplit(first_hits=np.array([[0, 3, 0, 0]]), first_passes=np.array([[2, 0, 0, 0]]),
@@ -144,10 +136,8 @@ def _far_from_lethal(lethal, resolution, radius):
 
 
 def cell_counts(split: ScanSplit, lethal, free, far) -> dict:
-    """Per-cell indicators {count name: boolean [y, x]} of :data:`COUNTS` for one map's classes on ``split``.
-
-    ``far``: cells beyond the cover radius of every lethal cell. Only held-out observed cells count.
-    """
+    """Per-cell indicators {count name: [y, x]} of :data:`COUNTS` for one map's classes on ``split`` (held-out observed
+    cells only); ``far``: cells beyond the cover radius of every lethal cell."""
     observed = split.group("all")
     occupied = split.labels()
     candidates = observed & (split.second_passes >= GHOST_PASSES) & (split.second_hits == 0)
@@ -197,8 +187,8 @@ def nav_scores(split: ScanSplit, predictions: dict, n_boot: int = 200, block: in
 
     Returns ``{name: {group: {metric: value, metric + "_ci": (lo, hi), metric + "_diff": name minus reference,
     metric + "_diff_ci": (lo, hi), count: int, ...}, "map": {...}}}`` with the metrics of the module doc
-    (``n_boot=0``: no intervals). The intervals of ``auc`` and ``nll`` are :func:`crfmap.assess.scansplit.score`'s:
-    pass its result as ``scores`` if it was computed already (same ``n_boot``, ``block``, ``seed``, ``reference``).
+    (``n_boot=0``: no intervals). ``auc`` and ``nll`` take :func:`crfmap.assess.scansplit.score`'s intervals: pass
+    its result as ``scores`` if computed already (same ``n_boot``, ``block``, ``seed``, ``reference``).
 
     >>> from crfmap.assess.scansplit import ScanSplit
     >>> sp = ScanSplit(*(np.random.default_rng(0).integers(0, 3, (8, 8)) for _ in range(4)))

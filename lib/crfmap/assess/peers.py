@@ -1,11 +1,10 @@
 """Published alternatives as scan-split rows: OctoMap's update and Bayesian Hilbert maps.
 
-Both are this project's implementations, not the authors' programs (:mod:`crfmap.mapping.octomap`, checked cell by
-cell against the OctoMap library; :mod:`crfmap.mapping.hilbert`, from the authors' BHM2D update). Each maps the
-split's first half (``split.first_scans``) on the split's grid and is scored like every other row
-(:func:`crfmap.assess.scansplit.score`). Their constants were chosen on Intel's scan split by the certainty preset's
-rule (a coordinate search by the Brier score, every chosen value interior to its grid;
-``crfstudy.analysis.peer_search`` keeps the records), then fixed for every recording. The wall times
+Both are this project's implementations, not the authors' programs (:mod:`crfmap.mapping.octomap`, checked cell by cell
+against the OctoMap library; :mod:`crfmap.mapping.hilbert`, from the authors' BHM2D update). Each maps the split's first
+half (``split.first_scans``) on the split's grid and is scored like every other row. Their constants were chosen on
+Intel's scan split by the certainty preset's rule (a coordinate search by the Brier score, every chosen value interior
+to its grid; ``crfstudy.analysis.peer_search`` keeps the records), then fixed for every recording. The wall times
 :func:`peer_rows` returns are benchmark numbers of this machine.
 """
 from __future__ import annotations
@@ -15,17 +14,14 @@ import time
 from crfmap.errors import InputError
 
 
-# OctoMap's constants for the peer row, chosen on Intel (crfstudy.analysis.peer_search.octomap_search). Brier over all
-# observed cells, most of them free, favours a map that frees cells fast: see the octomap-defaults row.
+# chosen on Intel (see the module doc); Brier over all observed cells, most of them free, favours freeing cells fast
 OCTOMAP_INTEL = {"p_hit": 0.8, "p_miss": 0.2, "clamp_min": 0.005, "clamp_max": 0.9999}
 
 
 def octomap_row(split, progress=False, **options):
-    """OctoMap's clamped log-odds map of the split's first half, [y, x] P(occupied).
-
-    ``options`` (``p_hit``, ``p_miss``, ``clamp_min``, ``clamp_max``) override :data:`OCTOMAP_INTEL`. ``progress``:
-    accepted like every row's (one pass over the scans: no bar).
-    """
+    """OctoMap's clamped log-odds map of the split's first half, [y, x] P(occupied). ``options`` (``p_hit``,
+    ``p_miss``, ``clamp_min``, ``clamp_max``) override :data:`OCTOMAP_INTEL`; ``progress`` is accepted like every
+    row's (one pass over the scans: no bar)."""
     from crfmap.mapping.octomap import octomap_grid
 
     return octomap_grid(_scans(split), split.resolution, bounds=split.bounds, **{**OCTOMAP_INTEL, **options}).probability
@@ -42,15 +38,14 @@ def hilbert_row(split, progress=False, **options):
 
 
 def octomap_defaults_row(split, progress=False, **options):
-    """OctoMap's update at the OctoMap library's own defaults: the peer as users run it out of the box (tuned by Brier,
-    ``octomap`` frees cells quickly and opens walls to nav2). Both rows are scored, so neither choice flatters the preset."""
+    """OctoMap's update at the OctoMap library's own defaults, as users run it out of the box: tuned by Brier,
+    ``octomap`` frees cells quickly and opens walls to nav2; scoring both rows, neither choice flatters the preset."""
     from crfmap.mapping.octomap import octomap_grid
 
     return octomap_grid(_scans(split), split.resolution, bounds=split.bounds, **options).probability
 
 
-# The registry of published peers: name -> row function (split, progress=False, **options) -> [y, x] P; a new peer is
-# one entry.
+# name -> row function (split, progress=False, **options) -> [y, x] P; a new peer is one entry
 _ROWS = {"octomap": octomap_row, "octomap-defaults": octomap_defaults_row, "hilbert": hilbert_row}
 PEERS = tuple(_ROWS)
 

@@ -1,24 +1,20 @@
 """Scan-split validation: does a refined map predict what the robot observes next? (no hand labels)
 
-A real recording has no ground truth, but it has many scans of the same place. Split its scans in two interleaved
-halves (even and odd scans by default): the grid is built from the *first* half only, refined, and each cell's
-P(occupied) is scored against what the *second* half observes there. Each second-half beam that returns marks its
-end cell occupied once; every cell it passes is marked free once. A cell the second half observed is labelled
-occupied when its beams ended there at least as often as they passed it (``hits2 >= passes2``), else free; every
-such cell counts once.
+A real recording has no ground truth, but many scans of each place. Its scans are split in two interleaved halves
+(even and odd by default): the grid is built and refined from the *first* half only, and each cell's P(occupied) is
+scored against the *second* half. Each second-half beam that returns counts one hit in its end cell and one pass in
+every cell it crosses; an observed cell is labelled occupied when ``hits2 >= passes2``, else free, and counts once.
 
-Scores (:func:`score`) are reported for three groups of second-half cells:
+:func:`score` reports three groups of second-half cells: ``"all"`` it observed; ``"seen"``, those the first half also
+observed (the map had evidence there); ``"unseen"``, those the first half never observed (the raw grid says 0.5 there:
+only filling-in can help).
 
-- ``"all"``: every cell the second half observed;
-- ``"seen"``: those the first half also observed (the map had evidence there);
-- ``"unseen"``: those the first half never observed (the raw grid says 0.5 there; only filling-in can help).
-
-Metrics: the Brier score (mean squared error of P against the 0/1 label), log-loss (P clipped to [LOG_FLOOR,
-1 - LOG_FLOOR]), AUC (ties count one half) and the recall of observed walls (the share of occupied-labelled cells
-with P > 0.5). Confidence intervals come from a *spatial-block bootstrap*: squares of ``block`` x ``block`` cells
-(not cells, which are correlated with their neighbours) are resampled with replacement. Predictions scored together
-share the resamples, so :func:`score` also gives intervals of the paired difference to a reference prediction;
-:func:`block_resamples` hands the same draws to other scorers (:mod:`crfmap.assess.navigation`).
+Metrics: the Brier score (mean squared error against the 0/1 label), log-loss (P clipped to [LOG_FLOOR,
+1 - LOG_FLOOR]), AUC (ties count one half) and wall recall (the share of occupied-labelled cells with P > 0.5).
+Intervals come from a *spatial-block bootstrap*: squares of ``block`` x ``block`` cells are resampled with
+replacement (single cells are correlated with their neighbours). Predictions scored together share the resamples, so
+:func:`score` also gives intervals of the paired difference to a reference; :func:`block_resamples` hands the same
+draws to other scorers (:mod:`crfmap.assess.navigation`).
 
 >>> split = ScanSplit(first_hits=np.array([[0, 3, 0]]), first_passes=np.array([[2, 0, 0]]),
 ...                   second_hits=np.array([[0, 2, 1]]), second_passes=np.array([[3, 0, 0]]))
@@ -63,11 +59,9 @@ def split_scans(scans, parity: int):
 
 @dataclass
 class ScanSplit:
-    """Hit counts ([y, x] int arrays on one grid) of the two halves of a recording's scans.
-
-    ``first_*`` build the map; ``second_*`` only score it. ``first_scans`` and ``second_scans`` (optional, set by
-    :func:`scan_split`) keep each half's ScanSet for what needs the scans themselves.
-    """
+    """Hit counts ([y, x] int arrays on one grid) of a recording's two halves of scans: ``first_*`` build the map,
+    ``second_*`` only score it; ``first_scans``/``second_scans`` (optional, set by :func:`scan_split`) keep each half's
+    ScanSet for what needs the scans themselves."""
 
     first_hits: np.ndarray
     first_passes: np.ndarray
@@ -116,9 +110,8 @@ class ScanSplit:
 
 
 def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress: bool = False) -> ScanSplit:
-    """Count the hits of the ``parity`` half (even scans: 0) and of the other half on one grid.
-
-    The grid is :func:`crfmap.mapping.build_grid`'s of all the scans, unless ``bounds`` (xmin, ymin, xmax, ymax) [m].
+    """Count the hits of the ``parity`` half (even scans: 0) and of the other half on one grid:
+    :func:`crfmap.mapping.build_grid`'s of all the scans, unless ``bounds`` (xmin, ymin, xmax, ymax) [m].
 
     >>> from crfmap.recording import ScanSet
     >>> r = np.array([[0.36], [0.26]], np.float32)
@@ -143,15 +136,10 @@ def scan_split(scans, resolution: float, parity: int = 0, bounds=None, progress:
                      second_scans=second)
 
 
-# --- scoring ------------------------------------------------------------------------------
-
-
 class _Scorer:
-    """The metrics of one prediction on one group of cells, fast under block resampling.
-
-    Brier, log-loss and recall are sums, kept per bootstrap block (all resamples at once are one matrix product);
-    the AUC sorts once (only when asked for) and reweights the sorted cells per resample in a compiled loop.
-    """
+    """The metrics of one prediction on one group of cells, fast under block resampling: Brier, log-loss and recall
+    are sums, kept per bootstrap block (all resamples at once are one matrix product); the AUC sorts once (only when
+    asked for) and reweights the sorted cells per resample in a compiled loop."""
 
     def __init__(self, p, y, inverse, n_blocks, auc=True, logloss=True, counts=None):
         """``logloss=False``: its sums stay 0; ``counts``: the (cells, walls) sums per block, if known."""
@@ -206,8 +194,8 @@ class _Scorer:
 def _layout(split, block) -> dict:
     """{group: (mask, labels, block ids, each cell's block index, (cells, walls) per block)} in ``block``-cell squares.
 
-    Kept on the split with the count arrays it was made from (the same objects and ``block``, or it is made again):
-    scoring many predictions on one split one :func:`score` call at a time finds the cells and blocks once.
+    Cached on the split, remade when its count arrays (by identity) or ``block`` change: scoring many predictions one
+    :func:`score` call at a time finds the cells and blocks once.
     """
     counts = (split.first_hits, split.first_passes, split.second_hits, split.second_passes)
     kept = split.__dict__.get("_layout")  # (the count arrays it was made from, block, layout)

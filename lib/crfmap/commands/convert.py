@@ -44,8 +44,7 @@ ORDER_PERIOD = 0.1  # [s] between scans stamped by their order (10 Hz, a common 
 
 def stamps_from_order(rec, source):
     """``rec``, or, if its scan stamps cannot place them in a tf tree (all 0, or repeated at different poses), ``rec``
-    with scan i stamped ``START_TIME + i * ORDER_PERIOD`` (true poses with it; odometry and cmd_vel dropped; one
-    warning)."""
+    with scan i stamped ``START_TIME + i * ORDER_PERIOD``, true poses with it, odometry and cmd_vel dropped, warned."""
     from crfmap.io.bag_writer import clashing_scans
     from crfmap.sim.simulator import START_TIME
 

@@ -142,10 +142,8 @@ def _fixed(value, digits):
 
 
 def nav_tables(nav: dict, group: str) -> str:
-    """The two navigation tables of ``compare(...)["_nav"]``: nav2's reading of ``group`` cells, and the whole map's walls.
-
-    Both fit a 120-column terminal with the project's row names.
-    """
+    """The two navigation tables of ``compare(...)["_nav"]``, nav2's reading of ``group`` cells and the whole map's
+    walls, both fitting a 120-column terminal with the project's row names."""
     from tabulate import tabulate
 
     header = ["method"] + [title + " %" for _, title in NAV_COLUMNS]
