@@ -36,8 +36,9 @@ def potts_weight(hidden=DEFAULT_HIDDEN) -> tuple:
 
 
 def graph_cut_map(observed, hidden=DEFAULT_HIDDEN, link=DEFAULT_LINK) -> tuple:
-    """Exact MAP labelling with PyMaxflow: (occupied[y, x] bool, energy from the flow). Sink side = occupied: a cell
-    on the sink side pays its source capacity (its occupied cost)."""
+    """Exact MAP labelling with PyMaxflow: (occupied[y, x] bool, energy from the flow).
+
+    Sink side = occupied: a cell on the sink side pays its source capacity (its occupied cost)."""
     import maxflow
 
     u = floored_unary(observed, link)

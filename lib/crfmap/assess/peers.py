@@ -19,9 +19,10 @@ OCTOMAP_INTEL = {"p_hit": 0.8, "p_miss": 0.2, "clamp_min": 0.005, "clamp_max": 0
 
 
 def octomap_row(split, progress=False, **options):
-    """OctoMap's clamped log-odds map of the split's first half, [y, x] P(occupied). ``options`` (``p_hit``,
-    ``p_miss``, ``clamp_min``, ``clamp_max``) override :data:`OCTOMAP_INTEL`; ``progress`` is accepted like every
-    row's (one pass over the scans: no bar)."""
+    """OctoMap's clamped log-odds map of the split's first half, [y, x] P(occupied).
+
+    ``options`` (``p_hit``, ``p_miss``, ``clamp_min``, ``clamp_max``) override :data:`OCTOMAP_INTEL`; ``progress`` is
+    accepted like every row's (one pass over the scans: no bar)."""
     from crfmap.mapping.octomap import octomap_grid
 
     return octomap_grid(_scans(split), split.resolution, bounds=split.bounds, **{**OCTOMAP_INTEL, **options}).probability
