@@ -22,8 +22,15 @@ from dataclasses import dataclass, field
 import json
 from pathlib import Path
 
+from crfmap.assess import score
 from crfmap.errors import InputError
 from crfmap.io.atomic import atomic_path
+
+
+def split_brier(split, p) -> float:
+    """The scan-split Brier score over all cells the second half observed of one [y, x] P grid: every search's
+    objective (and the study's single-number score of a grid)."""
+    return score(split, {"p": p}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
 
 
 @dataclass

@@ -23,6 +23,7 @@ from dataclasses import replace
 import numpy as np
 
 from crfmap.assess.scansplit import score
+from crfstudy.analysis.coordinate import split_brier
 from crfmap.crf.presets import coupling_table, get_preset
 from crfmap.crf.inference.lbp import infer
 from crfmap.assess.learning import learn_pseudolikelihood
@@ -103,8 +104,7 @@ def scaled_scores(split, couplings, scales, dtype=np.float32) -> dict:
         for s in scales:
             b = scaled_preset(j, s).refine(hits=split.first_hits, passes=split.first_passes,
                                            dtype=dtype).beliefs.probability
-            scored = score(split, {"p": b}, n_boot=0, groups=("all",), metrics=("brier",))
-            out[(float(j), float(s))] = scored["p"]["all"]["brier"]
+            out[(float(j), float(s))] = split_brier(split, b)
     return out
 
 

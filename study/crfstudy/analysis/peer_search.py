@@ -42,7 +42,7 @@ from pathlib import Path
 from crfmap.assess.peers import hilbert_row, octomap_row
 from crfmap.errors import InputError
 from crfmap.mapping import octomap
-from crfstudy.analysis.coordinate import SearchResult, coordinate_descent, check_or_write
+from crfstudy.analysis.coordinate import SearchResult, check_or_write, coordinate_descent, split_brier
 from crfstudy.analysis.preset_search import TRAINING, TRAINING_RESOLUTION
 from crfmap.assess.scansplit import score, scan_split
 from crfmap.io.recordings import load_recording
@@ -182,13 +182,9 @@ CACHES = {"octomap": Path(__file__).with_name("peer_search_octomap_intel.json"),
           "hilbert": Path(__file__).with_name("peer_search_hilbert_intel.json")}
 
 
-def _brier(split, p) -> float:
-    return score(split, {"p": p}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
-
-
 def octomap_brier(split, constants: dict) -> float:
     """Scan-split Brier score (all cells) of OctoMap's map of the split's first half with ``constants``."""
-    return _brier(split, octomap_row(split, **constants))
+    return split_brier(split, octomap_row(split, **constants))
 
 
 def octomap_search(split, grid: dict | None = None, start: dict | None = None, max_rounds: int = 10,

@@ -41,10 +41,10 @@ import numpy as np
 from crfmap.errors import InputError
 from crfstudy.analysis.coordinate import SearchResult, coordinate_descent  # noqa: F401 - SearchResult: re-exported
 from crfmap.crf.presets import coupling_table, get_preset
-from crfmap.assess.scansplit import score, scan_split
+from crfmap.assess.scansplit import scan_split
 from crfmap.io.recordings import load_recording
 from crfmap.data import data_file
-from crfstudy.analysis.coordinate import check_or_write
+from crfstudy.analysis.coordinate import check_or_write, split_brier
 
 # the grid each constant is searched on (a, c: first net hit / pass; b, d: each further one)
 GRID = {
@@ -95,7 +95,7 @@ def search_brier(split, constants: dict, dtype=np.float32, max_iter: int = 5000)
     """Scan-split Brier score (all cells) of the preset with ``constants`` on ``split``."""
     beliefs = preset_from(constants).refine(hits=split.first_hits, passes=split.first_passes, dtype=dtype,
                                             max_iter=max_iter).beliefs.probability
-    return score(split, {"p": beliefs}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
+    return split_brier(split, beliefs)
 
 
 def coordinate_search(split, grid: dict | None = None, start: dict | None = None, max_rounds: int = 10,

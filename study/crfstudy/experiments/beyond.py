@@ -33,6 +33,7 @@ import numpy as np
 from crfstudy import paths
 from crfstudy import splits as scan_splits
 from crfstudy.analysis import ablations, modelspace, preset_search
+from crfstudy.analysis.coordinate import split_brier
 from crfstudy.analysis.peer_search import HILBERT_SEARCH_COLUMNS, HILBERT_SEARCH_INTEL
 from crfstudy.plotting import OCCUPANCY_CMAP, shared_colorbar, show_grid
 from crfmap import DataMissingError
@@ -407,10 +408,6 @@ def recording_goals(result, role, n_boot, analysed=ANALYSED, default=DEFAULT_PRE
 
 
 # ---- transfer --------------------------------------------------------------------------------------------------------
-def _brier(split, p) -> float:
-    return score(split, {"p": p}, n_boot=0, groups=("all",), metrics=("brier",))["p"]["all"]["brier"]
-
-
 def transfer_tables(splits, results, preset, couplings, scales, steps, analysed=ANALYSED) -> tuple:
     """(scaled rows, pseudo-likelihood rows, {recording: (J, scale) chosen}): potentials learned on each recording
     (a row), scored on every recording (a column) by the scan-split Brier score on all cells.
@@ -434,7 +431,7 @@ def transfer_tables(splits, results, preset, couplings, scales, steps, analysed=
             region = preset.region(sp.first_hits + sp.first_passes > 0)
             raw = sp.raw_probability()
             q = infer(raw, H, L, region=region, max_iter=1000, dtype=np.float32).beliefs.probability
-            row_p.append(_brier(sp, np.where(region, q, raw)))
+            row_p.append(split_brier(sp, np.where(region, q, raw)))
         rows_scaled.append(row_s)
         rows_pl.append(row_p)
     rows_scaled.append(["recommended preset"] + [results[t][analysed]["all"]["brier"] for t in splits])
